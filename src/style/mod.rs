@@ -1,0 +1,384 @@
+//! Hairstyle files: parsing, validation, and turning a style into raw strands.
+//!
+//! `load` reads and validates a `.ron` file; `LoadedStyle::strands` generates (seed 004) or
+//! imports (TressFX) the strands that the multiresolution model (`crate::model`) is built from.
+
+pub mod generate;
+pub mod schema;
+pub mod tfx;
+
+use std::path::{Path, PathBuf};
+
+pub use schema::*;
+
+/// Anything wrong with a style or the files it refers to. Every message names the file, the
+/// position where there is one, and the field.
+#[derive(Debug, thiserror::Error)]
+pub enum StyleError {
+    #[error("{path}: cannot read: {source}")]
+    Io {
+        path: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
+    #[error("{path}: the file is empty")]
+    Empty { path: PathBuf },
+    #[error("{path}:{line}:{col}: {msg}")]
+    Parse {
+        path: PathBuf,
+        line: usize,
+        col: usize,
+        msg: String,
+    },
+    #[error("{path}{}: field `{field}`: {msg}", line.map(|l| format!(":{l}")).unwrap_or_default())]
+    Invalid {
+        path: PathBuf,
+        line: Option<usize>,
+        field: String,
+        msg: String,
+    },
+    #[error("{path}: {msg}")]
+    Tfx { path: PathBuf, msg: String },
+}
+
+/// A parsed, validated style and where it came from (relative paths inside it are resolved
+/// against the style file's folder).
+#[derive(Debug, Clone)]
+pub struct LoadedStyle {
+    pub path: PathBuf,
+    pub style: Style,
+    /// Collision spheres after resolving `TressFx.project`, if any (else `style.head.body`).
+    pub body: Vec<Sphere>,
+}
+
+/// One strand before resampling: its top-level wisp and its polyline, root first.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RawStrand {
+    pub wisp: u32,
+    pub points: Vec<[f64; 3]>,
+}
+
+/// All strands of a style, grouped into named top-level wisps. For imported hair the wisps are
+/// not known yet (`wisp_names` is empty and every `wisp` is 0): the model clusters them.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct RawHair {
+    pub wisp_names: Vec<String>,
+    pub strands: Vec<RawStrand>,
+}
+
+/// Reads, parses and validates a style file.
+pub fn load(path: &Path) -> Result<LoadedStyle, StyleError> {
+    let text = std::fs::read_to_string(path).map_err(|source| StyleError::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    parse(path, &text)
+}
+
+/// Parses and validates style text; `path` names it in errors and anchors relative paths.
+pub fn parse(path: &Path, text: &str) -> Result<LoadedStyle, StyleError> {
+    if text.trim().is_empty() {
+        return Err(StyleError::Empty {
+            path: path.to_path_buf(),
+        });
+    }
+    let style: Style = ron::Options::default()
+        .from_str(text)
+        .map_err(|e: ron::error::SpannedError| StyleError::Parse {
+            path: path.to_path_buf(),
+            line: e.span.start.line,
+            col: e.span.start.col,
+            msg: e.code.to_string(),
+        })?;
+    let invalid = |field: &str, msg: String| StyleError::Invalid {
+        path: path.to_path_buf(),
+        line: line_of_field(text, field),
+        field: field.to_string(),
+        msg,
+    };
+    validate(&style).map_err(|(field, msg)| invalid(&field, msg))?;
+    let body = match &style.hair {
+        Hair::TressFx(t) => match &t.project {
+            Some(p) => {
+                let proj = resolve(path, p);
+                tfx::load_project_spheres(&proj, t.scale, t.translate)?
+            }
+            None => style.head.body.clone(),
+        },
+        Hair::Generated(_) => style.head.body.clone(),
+    };
+    Ok(LoadedStyle {
+        path: path.to_path_buf(),
+        style,
+        body,
+    })
+}
+
+/// Resolves a path written in a style file against the style file's folder.
+pub fn resolve(style_path: &Path, rel: &str) -> PathBuf {
+    let rel = Path::new(rel);
+    if rel.is_absolute() {
+        rel.to_path_buf()
+    } else {
+        style_path
+            .parent()
+            .unwrap_or_else(|| Path::new("."))
+            .join(rel)
+    }
+}
+
+impl LoadedStyle {
+    /// Generates or imports the strands.
+    pub fn strands(&self) -> Result<RawHair, StyleError> {
+        match &self.style.hair {
+            Hair::Generated(g) => generate::generate(&self.style, g).map_err(|(field, msg)| {
+                StyleError::Invalid {
+                    path: self.path.clone(),
+                    line: None,
+                    field,
+                    msg,
+                }
+            }),
+            Hair::TressFx(t) => {
+                let mut hair = RawHair::default();
+                for f in &t.files {
+                    let p = resolve(&self.path, f);
+                    let strands = tfx::load_tfx(&p)?;
+                    for s in strands {
+                        let points = s
+                            .iter()
+                            .map(|v| {
+                                [
+                                    v[0] * t.scale + t.translate[0],
+                                    v[1] * t.scale + t.translate[1],
+                                    v[2] * t.scale + t.translate[2],
+                                ]
+                            })
+                            .collect();
+                        hair.strands.push(RawStrand { wisp: 0, points });
+                    }
+                }
+                Ok(hair)
+            }
+        }
+    }
+}
+
+/// Best-effort line number of the first `leaf:` of a dotted field path in the text.
+fn line_of_field(text: &str, field: &str) -> Option<usize> {
+    let leaf = field
+        .rsplit('.')
+        .next()?
+        .split('[')
+        .next()
+        .unwrap_or_default();
+    if leaf.is_empty() {
+        return None;
+    }
+    text.lines().enumerate().find_map(|(n, line)| {
+        let t = line.trim_start();
+        let after = t.strip_prefix(leaf)?;
+        after
+            .trim_start()
+            .starts_with(':')
+            .then_some(n + 1)
+    })
+}
+
+type Invalid = (String, String);
+
+fn check(ok: bool, field: &str, msg: impl FnOnce() -> String) -> Result<(), Invalid> {
+    if ok {
+        Ok(())
+    } else {
+        Err((field.to_string(), msg()))
+    }
+}
+
+fn positive(v: f64, field: &str) -> Result<(), Invalid> {
+    check(v.is_finite() && v > 0.0, field, || {
+        format!("must be a positive number, got {v}")
+    })
+}
+
+fn non_negative(v: f64, field: &str) -> Result<(), Invalid> {
+    check(v.is_finite() && v >= 0.0, field, || {
+        format!("must be zero or positive, got {v}")
+    })
+}
+
+fn finite3(v: &Vec3, field: &str) -> Result<(), Invalid> {
+    check(v.iter().all(|x| x.is_finite()), field, || {
+        format!("must be finite, got {v:?}")
+    })
+}
+
+/// Checks every value a style may get wrong; returns the dotted field path and the reason.
+pub fn validate(style: &Style) -> Result<(), Invalid> {
+    let h = &style.head;
+    finite3(&h.scalp.center, "head.scalp.center")?;
+    for (a, r) in h.scalp.radii.iter().enumerate() {
+        positive(*r, &format!("head.scalp.radii[{a}]"))?;
+    }
+    for (n, s) in h.body.iter().enumerate() {
+        finite3(&s.center, &format!("head.body[{n}].center"))?;
+        positive(s.radius, &format!("head.body[{n}].radius"))?;
+    }
+
+    let hi = &style.hierarchy;
+    check(hi.levels >= 1, "hierarchy.levels", || {
+        format!("needs at least one level of detail, got {}", hi.levels)
+    })?;
+    check(hi.levels <= 8, "hierarchy.levels", || {
+        format!("at most 8 levels are supported, got {}", hi.levels)
+    })?;
+    check(hi.cross_sections >= 2, "hierarchy.cross_sections", || {
+        format!(
+            "K must be at least 2 (a root and a tip), got {}",
+            hi.cross_sections
+        )
+    })?;
+    check(
+        hi.branching.len() == hi.levels - 1,
+        "hierarchy.branching",
+        || {
+            format!(
+                "needs levels - 1 = {} entries, got {}",
+                hi.levels - 1,
+                hi.branching.len()
+            )
+        },
+    )?;
+    for (n, b) in hi.branching.iter().enumerate() {
+        check(*b >= 2, &format!("hierarchy.branching[{n}]"), || {
+            format!("a GC must split into at least 2 sub-GCs, got {b}")
+        })?;
+    }
+    check(hi.top_level >= 1, "hierarchy.top_level", || {
+        "needs at least one top-level wisp".into()
+    })?;
+
+    match &style.link {
+        Link::Rigid { iterations } => check(*iterations >= 1, "link.iterations", || {
+            "needs at least one projection sweep".into()
+        })?,
+        Link::Spring { stiffness, damping } => {
+            positive(*stiffness, "link.stiffness")?;
+            non_negative(*damping, "link.damping")?;
+        }
+    }
+
+    let s = &style.sim;
+    positive(s.total_mass, "sim.total_mass")?;
+    non_negative(s.split_threshold, "sim.split_threshold")?;
+    non_negative(s.merge_velocity, "sim.merge_velocity")?;
+    non_negative(s.friction, "sim.friction")?;
+    non_negative(s.repulsion, "sim.repulsion")?;
+    check(
+        (0.0..=180.0).contains(&s.angle_threshold),
+        "sim.angle_threshold",
+        || format!("must be between 0 and 180 degrees, got {}", s.angle_threshold),
+    )?;
+    positive(s.dt, "sim.dt")?;
+    check(s.dt <= 0.1, "sim.dt", || {
+        format!("a step longer than 0.1 s is not stable, got {}", s.dt)
+    })?;
+    check(s.friction * s.dt < 1.0, "sim.friction", || {
+        format!(
+            "friction α·dt must be < 1 so friction never reverses a relative motion (AWT §4.2); α = {}, dt = {} gives {}",
+            s.friction,
+            s.dt,
+            s.friction * s.dt
+        )
+    })?;
+    check(s.steps_per_frame >= 1, "sim.steps_per_frame", || {
+        "needs at least one step per frame".into()
+    })?;
+    finite3(&s.gravity, "sim.gravity")?;
+    non_negative(s.air_drag, "sim.air_drag")?;
+    non_negative(s.bending, "sim.bending")?;
+    non_negative(s.contact_epsilon, "sim.contact_epsilon")?;
+    check(
+        s.accel_smoothing > 0.0 && s.accel_smoothing <= 1.0,
+        "sim.accel_smoothing",
+        || format!("must be in (0, 1], got {}", s.accel_smoothing),
+    )?;
+    finite3(&s.wind.velocity, "sim.wind.velocity")?;
+    non_negative(s.wind.gust, "sim.wind.gust")?;
+    non_negative(s.wind.frequency, "sim.wind.frequency")?;
+    positive(s.wind.wavelength, "sim.wind.wavelength")?;
+
+    match &style.hair {
+        Hair::Generated(g) => {
+            positive(g.density, "hair.density")?;
+            check(g.samples >= 2, "hair.samples", || {
+                format!("needs at least 2 samples per strand, got {}", g.samples)
+            })?;
+            check(!g.wisps.is_empty(), "hair.wisps", || {
+                "needs at least one wisp".into()
+            })?;
+            let mut names: Vec<&str> = Vec::new();
+            for (n, w) in g.wisps.iter().enumerate() {
+                let f = |x: &str| format!("hair.wisps[{n}].{x}");
+                check(!names.contains(&w.name.as_str()), &f("name"), || {
+                    format!("wisp name `{}` is used twice", w.name)
+                })?;
+                names.push(&w.name);
+                let (e0, e1) = w.region.elevation;
+                check(
+                    (-90.0..=90.0).contains(&e0) && (-90.0..=90.0).contains(&e1) && e0 < e1,
+                    &f("region.elevation"),
+                    || format!("must be (from, to) with -90 ≤ from < to ≤ 90, got ({e0}, {e1})"),
+                )?;
+                let (a0, a1) = w.region.azimuth;
+                check(
+                    a0.is_finite() && a1.is_finite() && a0 < a1 && a1 - a0 <= 360.0,
+                    &f("region.azimuth"),
+                    || format!("must be (from, to) with from < to ≤ from + 360, got ({a0}, {a1})"),
+                )?;
+                check(w.tiles.0 >= 1 && w.tiles.1 >= 1, &f("tiles"), || {
+                    format!("both tile counts must be ≥ 1, got {:?}", w.tiles)
+                })?;
+                check(!w.key_strand.is_empty(), &f("key_strand"), || {
+                    "needs at least one control point after the root".into()
+                })?;
+                for (c, p) in w.key_strand.iter().enumerate() {
+                    finite3(p, &f(&format!("key_strand[{c}]")))?;
+                }
+                non_negative(w.tip_spread, &f("tip_spread"))?;
+                if let Some(c) = &w.curl {
+                    non_negative(c.radius, &f("curl.radius"))?;
+                    non_negative(c.turns_per_metre, &f("curl.turns_per_metre"))?;
+                }
+                if let Some(d) = w.density {
+                    positive(d, &f("density"))?;
+                }
+            }
+            for (n, c) in g.copies.iter().enumerate() {
+                let f = |x: &str| format!("hair.copies[{n}].{x}");
+                check(names.contains(&c.source.as_str()), &f("source"), || {
+                    format!(
+                        "there is no wisp named `{}` (known: {})",
+                        c.source,
+                        names.join(", ")
+                    )
+                })?;
+                check(!names.contains(&c.name.as_str()), &f("name"), || {
+                    format!("wisp name `{}` is used twice", c.name)
+                })?;
+                check(c.azimuth_shift.is_finite(), &f("azimuth_shift"), || {
+                    "must be finite".into()
+                })?;
+                names.push(&c.name);
+            }
+        }
+        Hair::TressFx(t) => {
+            check(!t.files.is_empty(), "hair.files", || {
+                "needs at least one .tfx file".into()
+            })?;
+            positive(t.scale, "hair.scale")?;
+            finite3(&t.translate, "hair.translate")?;
+        }
+    }
+    Ok(())
+}

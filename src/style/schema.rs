@@ -1,0 +1,489 @@
+//! The hairstyle file format: what a `styles/*.ron` file may say.
+//!
+//! SI units throughout (metres, kilograms, seconds), right-handed, y up, the face looking
+//! towards +z. Every field has a default (documented on the field) except `hair`, and unknown
+//! fields are refused so that a typo never silently falls back to a default.
+
+use serde::{Deserialize, Serialize};
+
+/// A 3-vector in a style file: `(x, y, z)`.
+pub type Vec3 = [f64; 3];
+
+/// A complete hairstyle: the head, the hair, how the hair is cut into a wisp hierarchy, and
+/// the simulation parameters.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Style {
+    /// A display name. Default: empty (the file stem is used).
+    #[serde(default)]
+    pub name: String,
+    /// Seed of every random choice made while generating the hair (roots, offsets). Default 1.
+    #[serde(default = "default_seed")]
+    pub seed: u64,
+    /// The head and body in the rest pose. Default: [`Head::default`].
+    #[serde(default)]
+    pub head: Head,
+    /// The strands: generated from wisps, or imported from TressFX files. Required.
+    pub hair: Hair,
+    /// The multiresolution structure. Default: [`Hierarchy::default`].
+    #[serde(default)]
+    pub hierarchy: Hierarchy,
+    /// How consecutive nodes are linked. Default: `Rigid(iterations: 8)`.
+    #[serde(default)]
+    pub link: Link,
+    /// Simulation parameters. Default: [`SimParams::default`].
+    #[serde(default)]
+    pub sim: SimParams,
+}
+
+fn default_seed() -> u64 {
+    1
+}
+
+/// The head (scalp ellipsoid) and the body (bounding spheres, AWT §4.1), in the rest pose.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Head {
+    /// The scalp, on which generated roots are placed. Default: centre (0, 1.6, 0),
+    /// radii (0.075, 0.095, 0.09) m.
+    #[serde(default = "default_scalp")]
+    pub scalp: Ellipsoid,
+    /// Collision spheres of the head and body, moving with the character.
+    /// Default: a head sphere just inside the scalp, a neck and two shoulders/torso spheres.
+    #[serde(default = "default_body")]
+    pub body: Vec<Sphere>,
+}
+
+impl Default for Head {
+    fn default() -> Self {
+        Head {
+            scalp: default_scalp(),
+            body: default_body(),
+        }
+    }
+}
+
+fn default_scalp() -> Ellipsoid {
+    Ellipsoid {
+        center: [0.0, 1.6, 0.0],
+        radii: [0.075, 0.095, 0.09],
+    }
+}
+
+fn default_body() -> Vec<Sphere> {
+    vec![
+        Sphere {
+            center: [0.0, 1.6, 0.0],
+            radius: 0.072,
+        },
+        Sphere {
+            center: [0.0, 1.47, -0.01],
+            radius: 0.05,
+        },
+        Sphere {
+            center: [0.0, 1.25, -0.02],
+            radius: 0.15,
+        },
+        Sphere {
+            center: [0.12, 1.36, -0.02],
+            radius: 0.07,
+        },
+        Sphere {
+            center: [-0.12, 1.36, -0.02],
+            radius: 0.07,
+        },
+    ]
+}
+
+/// An axis-aligned ellipsoid.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Ellipsoid {
+    /// Centre, metres.
+    pub center: Vec3,
+    /// Semi-axes along x, y, z, metres (all > 0).
+    pub radii: Vec3,
+}
+
+/// A sphere.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Sphere {
+    /// Centre, metres.
+    pub center: Vec3,
+    /// Radius, metres (> 0).
+    pub radius: f64,
+}
+
+/// Where the strands come from.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub enum Hair {
+    /// Wisps grown on scalp regions from key strands (Zhang & Wünsche 2007, §3).
+    Generated(Generated),
+    /// Strands read from TressFX `.tfx` files (versions 3 and 4).
+    TressFx(TressFx),
+}
+
+/// Generated hair: wisps on scalp regions, plus copies and mirror images of them.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Generated {
+    /// Strands per square centimetre of scalp region, used by every wisp that does not give its
+    /// own. Default 20 (about 10,000 strands on a full scalp; real hair has ~150/cm², of which
+    /// we simulate and draw a representative subset).
+    #[serde(default = "default_density")]
+    pub density: f64,
+    /// Points each generated strand is sampled with before resampling to K cross-sections.
+    /// Default 32.
+    #[serde(default = "default_samples")]
+    pub samples: usize,
+    /// The wisps, each grown on its own region.
+    pub wisps: Vec<Wisp>,
+    /// Copies of wisps (optionally mirrored left↔right), by name. Default: none.
+    #[serde(default)]
+    pub copies: Vec<WispCopy>,
+}
+
+fn default_density() -> f64 {
+    20.0
+}
+
+fn default_samples() -> usize {
+    32
+}
+
+/// One wisp declaration: a region of the scalp, a key strand, and how members spread around it.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Wisp {
+    /// Unique name, used by copies.
+    pub name: String,
+    /// The scalp region the roots are spread over.
+    pub region: Region,
+    /// Cut the region into a grid of `(azimuth, elevation)` tiles, each its own top-level wisp
+    /// sharing this key strand (expressed in each tile's own styling frame). Default (1, 1).
+    #[serde(default = "default_tiles")]
+    pub tiles: (u32, u32),
+    /// Control points of the key strand, as Catmull-Rom control points in the styling frame at
+    /// the wisp's root: (tangent, normal, binormal) metres, where the normal is the scalp normal,
+    /// the tangent points down the scalp (towards decreasing elevation) and binormal =
+    /// tangent × normal. The root (0, 0, 0) is implicit and must not be repeated. At least one.
+    pub key_strand: Vec<Vec3>,
+    /// Largest distance of a member strand's tip from the key strand (its offset grows linearly
+    /// from 0 at the root to at most this at the tip), metres. Default 0.01.
+    #[serde(default = "default_tip_spread")]
+    pub tip_spread: f64,
+    /// Optional curl: a helix around the key strand.
+    #[serde(default)]
+    pub curl: Option<Curl>,
+    /// Strands per cm² for this wisp. Default: the style's `density`.
+    #[serde(default)]
+    pub density: Option<f64>,
+}
+
+fn default_tiles() -> (u32, u32) {
+    (1, 1)
+}
+
+fn default_tip_spread() -> f64 {
+    0.01
+}
+
+/// A region of the scalp ellipsoid in spherical angles, degrees.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Region {
+    /// Angle around the vertical axis, from +z (the face) towards +x: `(from, to)`, degrees.
+    pub azimuth: (f64, f64),
+    /// Angle above the horizontal plane through the scalp centre: `(from, to)`, degrees,
+    /// -90..=90 (90 is the crown).
+    pub elevation: (f64, f64),
+}
+
+/// A helix wound around a wisp's key strand.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Curl {
+    /// Helix radius, metres.
+    pub radius: f64,
+    /// Turns per metre of strand.
+    pub turns_per_metre: f64,
+}
+
+/// A copy of a wisp, by name.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct WispCopy {
+    /// The wisp (or earlier copy) to copy.
+    pub source: String,
+    /// The copy's own name.
+    pub name: String,
+    /// Mirror left↔right (x ↦ -x about the scalp centre): the copy is the exact mirror image of
+    /// its source, strand for strand. Default false.
+    #[serde(default)]
+    pub mirror: bool,
+    /// Without mirror: regrow the source's wisp on its region turned this many degrees of
+    /// azimuth. Default 0.
+    #[serde(default)]
+    pub azimuth_shift: f64,
+}
+
+/// Strands imported from TressFX files.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TressFx {
+    /// `.tfx` files, relative to the style file.
+    pub files: Vec<String>,
+    /// Factor from file units to metres. Default 0.01 (TressFX exports are in centimetres).
+    #[serde(default = "default_tfx_scale")]
+    pub scale: f64,
+    /// Translation applied after scaling, metres. Default (0, 0, 0).
+    #[serde(default)]
+    pub translate: Vec3,
+    /// A `.tfxproj` file, relative to the style file, whose collision spheres (scaled and
+    /// translated like the strands) replace `head.body`. Default: none.
+    #[serde(default)]
+    pub project: Option<String>,
+}
+
+fn default_tfx_scale() -> f64 {
+    0.01
+}
+
+/// The multiresolution structure (AWT §2.1–2.2).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Hierarchy {
+    /// Levels of detail, ≥ 1. Default 3.
+    #[serde(default = "default_levels")]
+    pub levels: usize,
+    /// Cross-sections (nodes) per generalized cylinder, root included, K ≥ 2. Default 12.
+    #[serde(default = "default_k")]
+    pub cross_sections: usize,
+    /// Sub-GCs per GC for each refinement, `levels - 1` entries, each ≥ 2. Default [4, 4].
+    #[serde(default = "default_branching")]
+    pub branching: Vec<usize>,
+    /// Imported hair only: how many top-level wisps to cluster the strands into (generated hair
+    /// has one per wisp tile). Default 32.
+    #[serde(default = "default_top_level")]
+    pub top_level: usize,
+}
+
+impl Default for Hierarchy {
+    fn default() -> Self {
+        Hierarchy {
+            levels: default_levels(),
+            cross_sections: default_k(),
+            branching: default_branching(),
+            top_level: default_top_level(),
+        }
+    }
+}
+
+fn default_levels() -> usize {
+    3
+}
+fn default_k() -> usize {
+    12
+}
+fn default_branching() -> Vec<usize> {
+    vec![4, 4]
+}
+fn default_top_level() -> usize {
+    32
+}
+
+/// The mechanical link between consecutive nodes of the AWT (§2.3).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub enum Link {
+    /// Rigid links for straight hair, by iterative constraint projection (Van Overveld).
+    Rigid {
+        /// Projection sweeps per step. Default 8.
+        #[serde(default = "default_link_iterations")]
+        iterations: u32,
+    },
+    /// Viscous springs for curly hair, integrated implicitly so curls can stretch.
+    Spring {
+        /// Stiffness per kilogram of the child node, s⁻². Default 400.
+        #[serde(default = "default_spring_stiffness")]
+        stiffness: f64,
+        /// Damping rate of the relative velocity along the link, s⁻¹. Default 20.
+        #[serde(default = "default_spring_damping")]
+        damping: f64,
+    },
+}
+
+impl Default for Link {
+    fn default() -> Self {
+        Link::Rigid {
+            iterations: default_link_iterations(),
+        }
+    }
+}
+
+fn default_link_iterations() -> u32 {
+    8
+}
+fn default_spring_stiffness() -> f64 {
+    400.0
+}
+fn default_spring_damping() -> f64 {
+    20.0
+}
+
+/// Simulation parameters. The ones marked *tunable* may change while the simulation runs.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SimParams {
+    /// Mass of the whole hair, kg. Default 1.0 (the paper: 0.5–2 kg).
+    #[serde(default = "d_total_mass")]
+    pub total_mass: f64,
+    /// Split threshold on |acceleration| × radius, N·m·kg⁻¹ (= m²·s⁻²). *Tunable.* Default 0.3
+    /// (the paper: 0.1–0.5).
+    #[serde(default = "d_split_threshold")]
+    pub split_threshold: f64,
+    /// Merge velocity threshold: largest relative speed of merging nodes, m/s. *Tunable.*
+    /// Default 0.05.
+    #[serde(default = "d_merge_velocity")]
+    pub merge_velocity: f64,
+    /// Friction α of hair–hair interaction (k_f = α·m_child), s⁻¹; α·dt must be < 1.
+    /// *Tunable.* Default 30.
+    #[serde(default = "d_friction")]
+    pub friction: f64,
+    /// Repulsion k_r between segments crossing at a large angle, per kilogram of the lighter
+    /// child node, s⁻². *Tunable.* Default 2000.
+    #[serde(default = "d_repulsion")]
+    pub repulsion: f64,
+    /// Angle between two segments' axes above which repulsion is added, degrees. *Tunable.*
+    /// Default 30.
+    #[serde(default = "d_angle_threshold")]
+    pub angle_threshold: f64,
+    /// Integration step, s. Default 0.01 (the paper).
+    #[serde(default = "d_dt")]
+    pub dt: f64,
+    /// Integration steps per displayed frame. Default 4 (the paper).
+    #[serde(default = "d_steps_per_frame")]
+    pub steps_per_frame: u32,
+    /// Gravity, m/s². *Tunable.* Default (0, -9.81, 0).
+    #[serde(default = "d_gravity")]
+    pub gravity: Vec3,
+    /// Air drag: rate at which a node's velocity relative to the wind is damped, s⁻¹.
+    /// *Tunable.* Default 0.8.
+    #[serde(default = "d_air_drag")]
+    pub air_drag: f64,
+    /// The wind field. *Tunable.* Default: still air.
+    #[serde(default)]
+    pub wind: Wind,
+    /// Pull of every segment towards its styled direction in the head frame, per kilogram, s⁻²;
+    /// keeps a hairstyle's shape (the AWT paper's links carry no bending stiffness). Decreases
+    /// linearly from the root to zero at the tip. *Tunable.* Default 60.
+    #[serde(default = "d_bending")]
+    pub bending: f64,
+    /// Relative speed below which two segments are not tested for collision (AWT §4.1), m/s.
+    /// Default 1e-3.
+    #[serde(default = "d_contact_epsilon")]
+    pub contact_epsilon: f64,
+    /// Smoothing of the acceleration used by the split test: the exponential moving-average
+    /// weight of the newest step, in (0, 1]. Default 0.5.
+    #[serde(default = "d_accel_smoothing")]
+    pub accel_smoothing: f64,
+}
+
+impl Default for SimParams {
+    fn default() -> Self {
+        SimParams {
+            total_mass: d_total_mass(),
+            split_threshold: d_split_threshold(),
+            merge_velocity: d_merge_velocity(),
+            friction: d_friction(),
+            repulsion: d_repulsion(),
+            angle_threshold: d_angle_threshold(),
+            dt: d_dt(),
+            steps_per_frame: d_steps_per_frame(),
+            gravity: d_gravity(),
+            air_drag: d_air_drag(),
+            wind: Wind::default(),
+            bending: d_bending(),
+            contact_epsilon: d_contact_epsilon(),
+            accel_smoothing: d_accel_smoothing(),
+        }
+    }
+}
+
+fn d_total_mass() -> f64 {
+    1.0
+}
+fn d_split_threshold() -> f64 {
+    0.3
+}
+fn d_merge_velocity() -> f64 {
+    0.05
+}
+fn d_friction() -> f64 {
+    30.0
+}
+fn d_repulsion() -> f64 {
+    2000.0
+}
+fn d_angle_threshold() -> f64 {
+    30.0
+}
+fn d_dt() -> f64 {
+    0.01
+}
+fn d_steps_per_frame() -> u32 {
+    4
+}
+fn d_gravity() -> Vec3 {
+    [0.0, -9.81, 0.0]
+}
+fn d_air_drag() -> f64 {
+    0.8
+}
+fn d_bending() -> f64 {
+    60.0
+}
+fn d_contact_epsilon() -> f64 {
+    1e-3
+}
+fn d_accel_smoothing() -> f64 {
+    0.5
+}
+
+/// Wind: a steady velocity plus a gust travelling through space,
+/// `w(x, t) = velocity + gust · sin(2π (frequency · t − x·direction / wavelength))`,
+/// along `velocity`'s direction.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Wind {
+    /// Mean air velocity, m/s. Default (0, 0, 0).
+    #[serde(default)]
+    pub velocity: Vec3,
+    /// Gust amplitude, m/s. Default 0.
+    #[serde(default)]
+    pub gust: f64,
+    /// Gust frequency, Hz. Default 0.5.
+    #[serde(default = "d_gust_frequency")]
+    pub frequency: f64,
+    /// Gust wavelength, m. Default 2.
+    #[serde(default = "d_gust_wavelength")]
+    pub wavelength: f64,
+}
+
+impl Default for Wind {
+    fn default() -> Self {
+        Wind {
+            velocity: [0.0; 3],
+            gust: 0.0,
+            frequency: d_gust_frequency(),
+            wavelength: d_gust_wavelength(),
+        }
+    }
+}
+
+fn d_gust_frequency() -> f64 {
+    0.5
+}
+fn d_gust_wavelength() -> f64 {
+    2.0
+}
