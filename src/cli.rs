@@ -62,9 +62,7 @@ pub fn main() -> i32 {
             eprintln!("wisptree: {e:#}");
             match e.downcast_ref::<style::StyleError>() {
                 Some(_) => EXIT_BAD_INPUT,
-                None if e.downcast_ref::<crate::motion::MotionError>().is_some() => {
-                    EXIT_BAD_INPUT
-                }
+                None if e.downcast_ref::<crate::motion::MotionError>().is_some() => EXIT_BAD_INPUT,
                 None => 1,
             }
         }

@@ -36,6 +36,9 @@ pub struct Level {
     pub radius: Vec<f64>,
     /// Per node: mass of the strand pieces it stands for, kg.
     pub mass: Vec<f64>,
+    /// Per node: mass of its GC from this cross-section to the tip, kg (what a link ending at
+    /// the node carries).
+    pub mass_below: Vec<f64>,
 }
 
 impl Level {
@@ -125,8 +128,7 @@ impl HairModel {
         }
 
         // 2. Top-level GCs: the style's wisps, or clusters of imported strands.
-        let (mut groups, tree_names): (Vec<Vec<u32>>, Vec<String>) = if hair.wisp_names.is_empty()
-        {
+        let (mut groups, tree_names): (Vec<Vec<u32>>, Vec<String>) = if hair.wisp_names.is_empty() {
             let all: Vec<u32> = (0..n as u32).collect();
             let groups = cluster(&all, s.hierarchy.top_level, &pts, k);
             let names = (0..groups.len()).map(|t| format!("wisp {t}")).collect();
@@ -266,6 +268,17 @@ impl HairModel {
             }
         }
 
+        for lv in &mut levels {
+            lv.mass_below = vec![0.0; lv.mass.len()];
+            for g in 0..lv.gc_count() {
+                let mut acc = 0.0;
+                for i in (0..k).rev() {
+                    acc += lv.mass[g * k + i];
+                    lv.mass_below[g * k + i] = acc;
+                }
+            }
+        }
+
         // Strand offsets from their finest node.
         strands.offset = strands
             .rest
@@ -334,7 +347,9 @@ impl HairModel {
         (0..self.strands.len())
             .map(|s| {
                 (1..k)
-                    .map(|i| (self.strands.rest[s * k + i] - self.strands.rest[s * k + i - 1]).norm())
+                    .map(|i| {
+                        (self.strands.rest[s * k + i] - self.strands.rest[s * k + i - 1]).norm()
+                    })
                     .sum::<f64>()
             })
             .fold(0.0, f64::max)
@@ -457,7 +472,10 @@ fn cluster(members: &[u32], k_clusters: usize, pts: &[Vector3<f64>], k: usize) -
                             ),
                         )
                     })
-                    .fold((usize::MAX, -1.0), |acc, x| if x.1 > acc.1 { x } else { acc });
+                    .fold(
+                        (usize::MAX, -1.0),
+                        |acc, x| if x.1 > acc.1 { x } else { acc },
+                    );
                 counts[assign[j]] -= 1;
                 assign[j] = c;
                 counts[c] = 1;

@@ -15,14 +15,26 @@ fn rigid_text(sim: &str) -> String {
 }
 
 fn spring_text(sim: &str) -> String {
-    style_text(2, &[3], K, 3, "Spring(stiffness: 400.0, damping: 20.0)", sim)
+    style_text(
+        2,
+        &[3],
+        K,
+        3,
+        "Spring(stiffness: 400.0, damping: 20.0)",
+        sim,
+    )
 }
 
 fn link_lengths(sim: &Simulation) -> Vec<(f64, f64)> {
     let s = &sim.slots;
     (0..s.len())
         .filter(|&c| s.parent[c] != NO_SLOT)
-        .map(|c| ((s.pos[c] - s.pos[s.parent[c] as usize]).norm(), s.rest_len[c]))
+        .map(|c| {
+            (
+                (s.pos[c] - s.pos[s.parent[c] as usize]).norm(),
+                s.rest_len[c],
+            )
+        })
         .collect()
 }
 
@@ -32,20 +44,31 @@ fn rigid_links_keep_their_length_within_a_tenth_of_a_percent_after_a_violent_ste
     let mut rng = Rng::new(3);
     // Violent: random velocities of several m/s on every node.
     for c in 0..sim.slots.len() {
-        sim.slots.vel[c] = Vector3::new(rng.range(-5.0, 5.0), rng.range(-5.0, 5.0), rng.range(-5.0, 5.0));
+        sim.slots.vel[c] = Vector3::new(
+            rng.range(-5.0, 5.0),
+            rng.range(-5.0, 5.0),
+            rng.range(-5.0, 5.0),
+        );
     }
     let mut r = StepReport::default();
     for _ in 0..30 {
         sim.step(&mut r);
         for (len, rest) in link_lengths(&sim) {
-            assert!(((len - rest) / rest).abs() < 1e-3, "length {len} rest {rest}");
+            assert!(
+                ((len - rest) / rest).abs() < 1e-3,
+                "length {len} rest {rest}"
+            );
         }
     }
 }
 
 #[test]
 fn springs_stretch_under_load_and_come_back() {
-    let mut sim = synthetic_sim(&spring_text("split_threshold: 100.0, bending: 0.0"), 60, "still");
+    let mut sim = synthetic_sim(
+        &spring_text("split_threshold: 100.0, bending: 0.0, friction: 0.0, repulsion: 0.0"),
+        60,
+        "still",
+    );
     let mut r = StepReport::default();
     let stretch = |sim: &Simulation| {
         link_lengths(sim)
@@ -53,13 +76,16 @@ fn springs_stretch_under_load_and_come_back() {
             .map(|(l, r)| l / r)
             .fold(0.0, f64::max)
     };
-    // Heavy load: gravity × 5.
-    sim.params.gravity = [0.0, -50.0, 0.0];
+    // Heavy load: gravity × 3.
+    sim.params.gravity = [0.0, -30.0, 0.0];
     for _ in 0..200 {
         sim.step(&mut r);
     }
     let loaded = stretch(&sim);
-    assert!(loaded > 1.02, "springs should stretch under load, max ratio {loaded}");
+    assert!(
+        loaded > 1.02,
+        "springs should stretch under load, max ratio {loaded}"
+    );
     // Unload: back to (nearly) rest length.
     sim.params.gravity = [0.0, 0.0, 0.0];
     for _ in 0..400 {
@@ -73,8 +99,16 @@ fn springs_stretch_under_load_and_come_back() {
 fn damping_never_reverses_a_relative_velocity() {
     let mut rng = Rng::new(9);
     for _ in 0..1000 {
-        let v1 = Vector3::new(rng.range(-3.0, 3.0), rng.range(-3.0, 3.0), rng.range(-3.0, 3.0));
-        let v2 = Vector3::new(rng.range(-3.0, 3.0), rng.range(-3.0, 3.0), rng.range(-3.0, 3.0));
+        let v1 = Vector3::new(
+            rng.range(-3.0, 3.0),
+            rng.range(-3.0, 3.0),
+            rng.range(-3.0, 3.0),
+        );
+        let v2 = Vector3::new(
+            rng.range(-3.0, 3.0),
+            rng.range(-3.0, 3.0),
+            rng.range(-3.0, 3.0),
+        );
         let (m1, m2) = (rng.range(1e-4, 1.0), rng.range(1e-4, 1.0));
         // ν·dt from gentle to ≫ 1.
         let nu = rng.range(0.0, 1e4);
@@ -97,14 +131,16 @@ fn no_node_ends_a_step_inside_a_body_sphere() {
             sim.step(&mut r);
             let pose = sim.pose().clone();
             for sp in &sim.model.body {
-                let c = pose.transform_point(&Point3::from(Vector3::from(sp.center))).coords;
+                let c = pose
+                    .transform_point(&Point3::from(Vector3::from(sp.center)))
+                    .coords;
                 for (n, x) in sim.slots.pos.iter().enumerate() {
                     if sim.slots.parent[n] == NO_SLOT {
                         continue;
                     }
                     let d = (x - c).norm();
                     assert!(
-                        d >= sp.radius * (1.0 - 1e-9),
+                        d >= sp.radius - 1e-6,
                         "{motion_name} step {step}: node {n} {d} inside sphere of radius {}",
                         sp.radius
                     );
@@ -122,9 +158,15 @@ fn the_invariant_holds_after_every_step_of_randomized_runs() {
         let split = rng.range(0.02, 0.5);
         let merge_v = rng.range(0.01, 0.3);
         let sim_text = format!("split_threshold: {split}, merge_velocity: {merge_v}");
-        let text = if run % 2 == 0 { rigid_text(&sim_text) } else { spring_text(&sim_text) };
-        let (loaded, model) = synthetic_model(&text, 40 + 10 * run, 0.3 + 0.05 * run as f64, run as u64);
-        let mut sim = Simulation::from_style(model.clone(), &loaded.style, motion(motion_name), false);
+        let text = if run % 2 == 0 {
+            rigid_text(&sim_text)
+        } else {
+            spring_text(&sim_text)
+        };
+        let (loaded, model) =
+            synthetic_model(&text, 40 + 10 * run, 0.3 + 0.05 * run as f64, run as u64);
+        let mut sim =
+            Simulation::from_style(model.clone(), &loaded.style, motion(motion_name), false);
         let mut r = StepReport::default();
         let mass = model.total_mass;
         for step in 0..250 {

@@ -43,6 +43,8 @@ pub struct Forest {
     pub slot_of: Vec<Vec<u32>>,
     /// Adaptation counter (steps on which `adapt` ran), used for the `changed_at` stamps.
     pub adapt_step: u64,
+    /// Scratch: AWT children `(level, gc)` of a node being split or merged.
+    children: Vec<(usize, usize)>,
 }
 
 /// Scratch buffers of `adapt`, kept between steps.
@@ -68,8 +70,11 @@ pub fn min_rotation(from: &Vector3<f64>, to: &Vector3<f64>) -> Matrix3<f64> {
         } else {
             a.cross(&Vector3::y())
         };
-        return *Rotation3::from_axis_angle(&nalgebra::Unit::new_normalize(axis), std::f64::consts::PI)
-            .matrix();
+        return *Rotation3::from_axis_angle(
+            &nalgebra::Unit::new_normalize(axis),
+            std::f64::consts::PI,
+        )
+        .matrix();
     }
     // Rodrigues: R = I + [v]x + [v]x² (1 − c) / s².
     let vx = Matrix3::new(0.0, -v.z, v.y, v.z, 0.0, -v.x, -v.y, v.x, 0.0);
@@ -136,7 +141,13 @@ impl Forest {
     }
 
     /// The active ancestor-or-self of `(l, g, i)`, if any: `(level, node index)`.
-    pub fn governor_above(&self, m: &HairModel, l: usize, g: usize, i: usize) -> Option<(usize, usize)> {
+    pub fn governor_above(
+        &self,
+        m: &HairModel,
+        l: usize,
+        g: usize,
+        i: usize,
+    ) -> Option<(usize, usize)> {
         let k = m.k;
         let mut gg = g;
         let mut ll = l;
@@ -185,6 +196,53 @@ impl Forest {
             Some(p) => min_rotation(&self.state[l].ref_tangent[g * k + i], &(a - p)),
             None => Matrix3::identity(),
         }
+    }
+
+    /// The active nodes at cross-section `i` among the descendants-or-self of GC `(l, g)`, into
+    /// `self.children`.
+    fn collect_active(&mut self, m: &HairModel, l: usize, g: usize, i: usize) {
+        let k = m.k;
+        self.children.clear();
+        let mut range = g..g + 1;
+        for ll in l..m.level_count() {
+            if ll > l {
+                let lv = &m.levels[ll - 1];
+                range =
+                    lv.sub_gcs[range.start].start as usize..lv.sub_gcs[range.end - 1].end as usize;
+            }
+            for d in range.clone() {
+                if self.active[ll][d * k + i] {
+                    self.children.push((ll, d));
+                }
+            }
+        }
+    }
+
+    /// Before the node `(l, g, i)` changes (split or merge), brings the followers of its AWT
+    /// children at `i + 1` to the present: their reference tangents were taken against it.
+    fn children_to_present(&mut self, m: &HairModel, l: usize, g: usize, i: usize) {
+        if i + 1 >= m.k {
+            return;
+        }
+        self.collect_active(m, l, g, i + 1);
+        let children = std::mem::take(&mut self.children);
+        for &(cl, cg) in &children {
+            self.follow_below(m, cl, cg, i + 1);
+        }
+        self.children = children;
+    }
+
+    /// After the node `(l, g, i)` changed: the AWT children at `i + 1` have a new parent, so
+    /// their followers' offsets are recorded again against the new segment tangent.
+    fn children_rerecord(&mut self, m: &HairModel, i: usize) {
+        if i + 1 >= m.k {
+            return;
+        }
+        let children = std::mem::take(&mut self.children);
+        for &(cl, cg) in &children {
+            self.record_followers(m, cl, cg, i + 1);
+        }
+        self.children = children;
     }
 
     /// Moves the descendants of active node `(l, g, i)` to their followed positions.
@@ -451,7 +509,14 @@ fn merge_test(
 }
 
 /// The radius that tightly encloses the sub-nodes of `(l, g, i)` around `centre`.
-fn refit_radius(m: &HairModel, forest: &Forest, l: usize, g: usize, i: usize, centre: &Vector3<f64>) -> f64 {
+fn refit_radius(
+    m: &HairModel,
+    forest: &Forest,
+    l: usize,
+    g: usize,
+    i: usize,
+    centre: &Vector3<f64>,
+) -> f64 {
     let k = m.k;
     let sl = &forest.state[l + 1];
     m.levels[l].sub_gcs[g]
@@ -463,15 +528,19 @@ fn refit_radius(m: &HairModel, forest: &Forest, l: usize, g: usize, i: usize, ce
         .fold(crate::model::MIN_RADIUS, f64::max)
 }
 
+/// `now` stamps the nodes that changed (pass `forest.adapt_step` outside `adapt`: a node stamped
+/// with the current adaptation step is left alone by the rest of that step).
 /// Replaces active node `(l, g, i)` by its sub-nodes at their followed positions, with its
 /// velocity (and acceleration, so the smoothing continues).
 pub fn split(m: &HairModel, forest: &mut Forest, l: usize, g: usize, i: usize, now: u64) {
     let k = m.k;
     let j = g * k + i;
-    // Bring every follower of the node to the present before handing them over.
+    // Bring every follower of the node, and of its children, to the present before the tree
+    // changes under them.
     if i > 0 {
         forest.follow_below(m, l, g, i);
     }
+    forest.children_to_present(m, l, g, i);
     let (v, a) = (forest.state[l].vel[j], forest.state[l].acc[j]);
     forest.active[l][j] = false;
     forest.state[l].changed_at[j] = now;
@@ -490,6 +559,7 @@ pub fn split(m: &HairModel, forest: &mut Forest, l: usize, g: usize, i: usize, n
             forest.record_followers(m, l + 1, s as usize, i);
         }
     }
+    forest.children_rerecord(m, i);
 }
 
 /// Merges the sub-nodes of `(l, g, i)` into it: centre of mass, mass-weighted velocity, tight
@@ -498,7 +568,8 @@ pub fn merge(m: &HairModel, forest: &mut Forest, l: usize, g: usize, i: usize, n
     let k = m.k;
     let j = g * k + i;
     let subs = m.levels[l].sub_gcs[g].clone();
-    // Deeper followers of the sub-nodes to the present first.
+    // Deeper followers of the sub-nodes, and the children's followers, to the present first.
+    forest.children_to_present(m, l, g, i);
     if i > 0 {
         for s in subs.clone() {
             if l + 2 < m.level_count() {
@@ -536,4 +607,5 @@ pub fn merge(m: &HairModel, forest: &mut Forest, l: usize, g: usize, i: usize, n
     if i > 0 {
         forest.record_followers(m, l, g, i);
     }
+    forest.children_rerecord(m, i);
 }

@@ -108,7 +108,14 @@ pub fn external_forces(m: &HairModel, p: &SimParams, pose: &Pose, _t: f64, s: &m
 }
 
 /// Advances velocities and positions of the non-root nodes by one step.
-pub fn integrate(link: &Link, p: &SimParams, t: f64, dt: f64, s: &mut Slots, scratch: &mut Scratch) {
+pub fn integrate(
+    link: &Link,
+    p: &SimParams,
+    t: f64,
+    dt: f64,
+    s: &mut Slots,
+    scratch: &mut Scratch,
+) {
     match *link {
         Link::Rigid { .. } => {
             for c in 0..s.len() {
@@ -130,7 +137,8 @@ pub fn integrate(link: &Link, p: &SimParams, t: f64, dt: f64, s: &mut Slots, scr
         }
         if f > 0.0 {
             let w = wind_at(p, &s.pos[c], t);
-            s.vel[c] += (w - s.vel[c]) * f;
+            let v = s.vel[c];
+            s.vel[c] = v + (w - v) * f;
         }
         s.pos[c] += s.vel[c] * dt;
     }
@@ -161,8 +169,9 @@ fn implicit_springs(stiffness: f64, damping: f64, dt: f64, s: &mut Slots, sc: &m
         let len = d.norm().max(1e-9);
         let u = d / len;
         let rest = s.rest_len[c];
-        let k = stiffness * s.mass[c];
-        let kd = damping * s.mass[c];
+        // Per kilogram carried, so every link of a hanging strand stretches alike.
+        let k = stiffness * s.mass_below[c];
+        let kd = damping * s.mass_below[c];
         let vrel = s.vel[c] - s.vel[pa];
         let uu = u * u.transpose();
         let f_s = -u * (k * (len - rest)) - u * (kd * vrel.dot(&u));
@@ -270,14 +279,44 @@ pub fn restore_lengths_outside(s: &mut Slots, spheres: &[BodySphere], pose: &Pos
         let len = s.rest_len[c];
         let d = s.pos[c] - p;
         let n = d.norm();
-        let mut x = if n > 1e-12 { p + d * (len / n) } else { s.pos[c] };
+        let mut x = if n > 1e-12 {
+            p + d * (len / n)
+        } else {
+            s.pos[c]
+        };
         let mut touched = false;
-        for sp in spheres {
-            if (x - sp.center).norm() >= sp.radius {
-                continue;
+        // Overlapping spheres can push a node into each other: a few rounds settle it.
+        for _ in 0..4 {
+            let mut moved = false;
+            for sp in spheres {
+                if (x - sp.center).norm() >= sp.radius {
+                    continue;
+                }
+                moved = true;
+                x = nearest_on_circle(&p, len, &sp.center, sp.radius, &x);
             }
-            touched = true;
-            x = nearest_on_circle(&p, len, &sp.center, sp.radius, &x);
+            touched |= moved;
+            if !moved {
+                break;
+            }
+        }
+        // In the crease between two spheres the circle may not leave both: staying outside
+        // wins over the exact length there.
+        for _ in 0..4 {
+            let mut moved = false;
+            for sp in spheres {
+                let d = x - sp.center;
+                let n = d.norm();
+                if n >= sp.radius {
+                    continue;
+                }
+                moved = true;
+                let dir = if n > 1e-12 { d / n } else { Vector3::y() };
+                x = sp.center + dir * (sp.radius * (1.0 + 1e-7));
+            }
+            if !moved {
+                break;
+            }
         }
         s.pos[c] = x;
         if touched {
@@ -299,7 +338,7 @@ fn nearest_on_circle(
         let d = x - centre;
         let n = d.norm();
         let dir = if n > 1e-12 { d / n } else { Vector3::y() };
-        centre + dir * (radius * (1.0 + 1e-9))
+        centre + dir * (radius * (1.0 + 1e-7))
     };
     let cp = centre - p;
     let dist = cp.norm();
@@ -315,13 +354,17 @@ fn nearest_on_circle(
     let dir = if wn > 1e-12 {
         w / wn
     } else {
-        let any = if nrm.x.abs() < 0.9 { Vector3::x() } else { Vector3::y() };
+        let any = if nrm.x.abs() < 0.9 {
+            Vector3::x()
+        } else {
+            Vector3::y()
+        };
         nrm.cross(&any).normalize()
     };
     // Nudge outwards by a hair so the result is not inside by rounding.
     let y = q + dir * h;
     let out = y - centre;
-    centre + out * ((radius * (1.0 + 1e-9)) / out.norm())
+    centre + out * ((radius * (1.0 + 1e-7)) / out.norm())
 }
 
 /// Smoothed world-frame acceleration from the velocity change over the step: an exponential

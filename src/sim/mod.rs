@@ -50,6 +50,8 @@ pub struct Slots {
     pub acc: Vec<Vector3<f64>>,
     pub force: Vec<Vector3<f64>>,
     pub mass: Vec<f64>,
+    /// Mass carried by the link ending at the node (node to tip of its GC).
+    pub mass_below: Vec<f64>,
     pub radius: Vec<f64>,
     /// Rest vector from the parent to this node in the rest pose (the styled direction).
     pub rest_vec: Vec<Vector3<f64>>,
@@ -80,6 +82,7 @@ impl Slots {
         self.acc.clear();
         self.force.clear();
         self.mass.clear();
+        self.mass_below.clear();
         self.radius.clear();
         self.rest_vec.clear();
         self.rest_len.clear();
@@ -195,7 +198,7 @@ impl Simulation {
     fn gather(&mut self) {
         let m = &*self.model;
         let k = m.k;
-        let f = &self.forest;
+        let f = &mut self.forest;
         let s = &mut self.slots;
         s.clear();
         for i in 0..k {
@@ -206,7 +209,7 @@ impl Simulation {
                         continue;
                     }
                     let slot = s.level.len() as u32;
-                    self.forest.slot_of[l][j] = slot;
+                    f.slot_of[l][j] = slot;
                     s.level.push(l as u8);
                     s.node.push(j as u32);
                     s.cs.push(i as u16);
@@ -216,10 +219,10 @@ impl Simulation {
                         let (pl, pj) = f
                             .governor_above(m, l, g, i - 1)
                             .expect("the AWT invariant gives every non-root node a parent");
-                        self.forest.slot_of[pl][pj]
+                        f.slot_of[pl][pj]
                     };
                     s.parent.push(parent);
-                    let st = &self.forest.state[l];
+                    let st = &f.state[l];
                     s.pos.push(st.pos[j]);
                     s.prev_pos.push(st.pos[j]);
                     s.vel.push(st.vel[j]);
@@ -227,6 +230,7 @@ impl Simulation {
                     s.acc.push(st.acc[j]);
                     s.force.push(Vector3::zeros());
                     s.mass.push(lv.mass[j]);
+                    s.mass_below.push(lv.mass_below[j]);
                     s.radius.push(st.radius[j]);
                     s.rest_vec.push(Vector3::zeros());
                     s.rest_len.push(0.0);
@@ -381,9 +385,26 @@ impl Simulation {
                 self.gather();
                 // Roots activated by a split or merge sit exactly on the scalp.
                 dynamics::pose_roots(&self.model, &self.pose, &mut self.slots);
-                self.scatter();
+                // New links join followed positions, which need not be at rest length (and a
+                // followed node may sit inside the body): one exact pass ends the step valid.
+                if matches!(self.link, Link::Rigid { .. }) {
+                    dynamics::restore_lengths_outside(&mut self.slots, &self.spheres, &self.pose);
+                } else {
+                    let s = &mut self.slots;
+                    let view = collide::SegmentsView {
+                        parent: &s.seg_parent,
+                        child: &s.seg_child,
+                        radius: &s.seg_radius,
+                        child_mass: &s.seg_mass,
+                    };
+                    let pose = &self.pose;
+                    collide::resolve_body(&view, &mut s.pos, &mut s.vel, &self.spheres, |x| {
+                        pose.velocity_at(&Point3::from(*x))
+                    });
+                }
             }
         }
+        self.scatter();
         times.adapt = clock.elapsed();
 
         let c = &mut report.counters;

@@ -82,14 +82,15 @@ pub fn parse(path: &Path, text: &str) -> Result<LoadedStyle, StyleError> {
             path: path.to_path_buf(),
         });
     }
-    let style: Style = ron::Options::default()
-        .from_str(text)
-        .map_err(|e: ron::error::SpannedError| StyleError::Parse {
-            path: path.to_path_buf(),
-            line: e.span.start.line,
-            col: e.span.start.col,
-            msg: e.code.to_string(),
-        })?;
+    let style: Style =
+        ron::Options::default()
+            .from_str(text)
+            .map_err(|e: ron::error::SpannedError| StyleError::Parse {
+                path: path.to_path_buf(),
+                line: e.span.start.line,
+                col: e.span.start.col,
+                msg: e.code.to_string(),
+            })?;
     let invalid = |field: &str, msg: String| StyleError::Invalid {
         path: path.to_path_buf(),
         line: line_of_field(text, field),
@@ -131,14 +132,14 @@ impl LoadedStyle {
     /// Generates or imports the strands.
     pub fn strands(&self) -> Result<RawHair, StyleError> {
         match &self.style.hair {
-            Hair::Generated(g) => generate::generate(&self.style, g).map_err(|(field, msg)| {
-                StyleError::Invalid {
+            Hair::Generated(g) => {
+                generate::generate(&self.style, g).map_err(|(field, msg)| StyleError::Invalid {
                     path: self.path.clone(),
                     line: None,
                     field,
                     msg,
-                }
-            }),
+                })
+            }
             Hair::TressFx(t) => {
                 let mut hair = RawHair::default();
                 for f in &t.files {
@@ -178,10 +179,7 @@ fn line_of_field(text: &str, field: &str) -> Option<usize> {
     text.lines().enumerate().find_map(|(n, line)| {
         let t = line.trim_start();
         let after = t.strip_prefix(leaf)?;
-        after
-            .trim_start()
-            .starts_with(':')
-            .then_some(n + 1)
+        after.trim_start().starts_with(':').then_some(n + 1)
     })
 }
 
@@ -277,7 +275,12 @@ pub fn validate(style: &Style) -> Result<(), Invalid> {
     check(
         (0.0..=180.0).contains(&s.angle_threshold),
         "sim.angle_threshold",
-        || format!("must be between 0 and 180 degrees, got {}", s.angle_threshold),
+        || {
+            format!(
+                "must be between 0 and 180 degrees, got {}",
+                s.angle_threshold
+            )
+        },
     )?;
     positive(s.dt, "sim.dt")?;
     check(s.dt <= 0.1, "sim.dt", || {

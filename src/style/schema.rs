@@ -304,10 +304,12 @@ pub enum Link {
     },
     /// Viscous springs for curly hair, integrated implicitly so curls can stretch.
     Spring {
-        /// Stiffness per kilogram of the child node, s⁻². Default 400.
+        /// Stiffness per kilogram of hair the link carries (from its child node to the tip),
+        /// s⁻²: under gravity g a link stretches by about g / stiffness metres. Default 1500.
         #[serde(default = "default_spring_stiffness")]
         stiffness: f64,
-        /// Damping rate of the relative velocity along the link, s⁻¹. Default 20.
+        /// Damping rate of the relative velocity along the link, per kilogram carried, s⁻¹.
+        /// Default 20.
         #[serde(default = "default_spring_damping")]
         damping: f64,
     },
@@ -325,7 +327,7 @@ fn default_link_iterations() -> u32 {
     8
 }
 fn default_spring_stiffness() -> f64 {
-    400.0
+    1500.0
 }
 fn default_spring_damping() -> f64 {
     20.0

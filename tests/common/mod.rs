@@ -39,7 +39,14 @@ impl Rng {
 
 /// A style text with the given hierarchy, link and parameters; the hair itself comes from
 /// `synthetic_hair` (the `files` entry is never read).
-pub fn style_text(levels: usize, branching: &[usize], k: usize, top: usize, link: &str, sim: &str) -> String {
+pub fn style_text(
+    levels: usize,
+    branching: &[usize],
+    k: usize,
+    top: usize,
+    link: &str,
+    sim: &str,
+) -> String {
     format!(
         "(hair: TressFx((files: [\"unused.tfx\"])), \
           hierarchy: (levels: {levels}, cross_sections: {k}, branching: {branching:?}, top_level: {top}), \
@@ -79,7 +86,12 @@ pub fn synthetic_hair(strands: usize, length: f64, seed: u64) -> RawHair {
 }
 
 /// A synthetic model: `strands` straight strands, clustered into `top` wisps.
-pub fn synthetic_model(text: &str, strands: usize, length: f64, seed: u64) -> (LoadedStyle, Arc<HairModel>) {
+pub fn synthetic_model(
+    text: &str,
+    strands: usize,
+    length: f64,
+    seed: u64,
+) -> (LoadedStyle, Arc<HairModel>) {
     let loaded = style::parse(Path::new("synthetic.ron"), text).expect("fixture style parses");
     let hair = synthetic_hair(strands, length, seed);
     let model = HairModel::build(&loaded, &hair);
