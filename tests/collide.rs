@@ -617,3 +617,27 @@ fn validate_refuses_reversing_friction() {
     q.repulsion = f64::NAN;
     assert!(q.validate(0.01).unwrap_err().contains("repulsion"));
 }
+
+#[test]
+fn clustered_overlapping_spheres_leave_no_child_inside() {
+    // Many small overlapping spheres (a lumpy body): pushing out of one can land in another.
+    let mut rng = Rng(42);
+    let sph: Vec<BodySphere> = (0..40)
+        .map(|_| BodySphere {
+            center: rng.vec(0.08),
+            radius: rng.range(0.03, 0.09),
+        })
+        .collect();
+    let mut s = Scene::default();
+    for _ in 0..2000 {
+        s.lone(rng.vec(0.15), rng.vec(0.15), rng.vec(1.0), 0.005, 0.001);
+    }
+    let pushed = s.resolve(&sph, obstacle_velocity);
+    assert!(pushed > 500, "{pushed}");
+    for c in &s.child {
+        let x = s.pos[*c as usize];
+        for sp in &sph {
+            assert!((x - sp.center).norm_squared() >= sp.radius * sp.radius);
+        }
+    }
+}

@@ -123,8 +123,8 @@ impl ContactParams {
 /// Counters of one [`HairCollider::accumulate`] call.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct PairStats {
-    /// Pairs that reached the cylinder test: sharing a voxel, not adjacent, moving relative to
-    /// each other. Each such pair counts once.
+    /// Pairs that reached the cylinder test (box overlap, then closest points): sharing a voxel,
+    /// not adjacent, moving relative to each other. Each such pair counts once.
     pub tested: u32,
     /// Of those, the pairs whose cylinders intersect (`d < r1 + r2`).
     pub in_contact: u32,
@@ -396,6 +396,15 @@ fn interact(
     }
     stats.tested += 1;
     let (xpa, xca, xpb, xcb) = (pos[pa], pos[ca], pos[pb], pos[cb]);
+    let r = segs.radius[a] + segs.radius[b];
+    // Cheap exact rejection before the closest points: cylinders closer than r1 + r2 have boxes,
+    // inflated by r1 + r2 in total, that overlap on every axis. Segments sharing a cell often
+    // do not.
+    let (lo_a, hi_a) = (xpa.inf(&xca), xpa.sup(&xca));
+    let (lo_b, hi_b) = (xpb.inf(&xcb), xpb.sup(&xcb));
+    if (0..3).any(|k| lo_a[k] - hi_b[k] > r || lo_b[k] - hi_a[k] > r) {
+        return;
+    }
     let (s, t) = closest_segment_params(&xpa, &xca, &xpb, &xcb);
     let d1 = xca - xpa;
     let d2 = xcb - xpb;
@@ -403,7 +412,6 @@ fn interact(
     let p2 = xpb + d2 * t;
     let delta = p1 - p2;
     let dist2 = delta.norm_squared();
-    let r = segs.radius[a] + segs.radius[b];
     if dist2 >= r * r {
         return;
     }
