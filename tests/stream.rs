@@ -606,3 +606,53 @@ fn demo_recording() {
     }
     logger.flush().expect("flush");
 }
+
+/// Rough cost of `log_frame` at the paper's sizes (prints, asserts nothing about time):
+/// `cargo test --release --test stream cost -- --ignored --nocapture`.
+#[test]
+#[ignore = "measurement, not a check"]
+fn log_frame_cost() {
+    let (rec, storage) = rerun::RecordingStreamBuilder::new("wisptree-cost")
+        .memory()
+        .expect("memory recording");
+    let mut logger = Logger::new(rec, LEVELS, "cost", HEAD).expect("logger");
+    let mut f = synthetic_frame(0);
+    let n = 6000;
+    f.nodes.positions = (0..n).map(|k| [k as f32 * 1e-4, 1.0, 0.0]).collect();
+    f.nodes.radii = vec![0.01; n];
+    f.nodes.levels = (0..n).map(|k| (k % 3) as u16).collect();
+    f.segments.starts = f.nodes.positions.clone();
+    f.segments.ends = f
+        .nodes
+        .positions
+        .iter()
+        .map(|p| [p[0], p[1] - 0.05, p[2]])
+        .collect();
+    f.segments.radii = f.nodes.radii.clone();
+    f.segments.levels = f.nodes.levels.clone();
+    f.strands.points.clear();
+    f.strands.offsets = vec![0];
+    for s in 0..10_000 {
+        for p in 0..16 {
+            f.strands
+                .points
+                .push([s as f32 * 1e-5, 1.6 - 0.04 * p as f32, 0.0]);
+        }
+        f.strands.offsets.push(f.strands.points.len() as u32);
+    }
+    let frames = 20;
+    let t0 = std::time::Instant::now();
+    for i in 0..frames {
+        f.index = i;
+        logger.log_frame(&f).expect("log");
+    }
+    let logged = t0.elapsed();
+    logger.flush().expect("flush");
+    let total = t0.elapsed();
+    drop(storage.take());
+    println!(
+        "log_frame: {:.2} ms/frame to log, {:.2} ms/frame including the flush",
+        logged.as_secs_f64() * 1e3 / frames as f64,
+        total.as_secs_f64() * 1e3 / frames as f64
+    );
+}
