@@ -112,6 +112,7 @@ fn params() -> ContactParams {
         repulsion: 2000.0,
         cos_angle_threshold: 0.8,
         epsilon: 1e-4,
+        dt: 0.01,
     }
 }
 

@@ -85,6 +85,23 @@ pub struct ContactParams {
     pub cos_angle_threshold: f64,
     /// Relative speed below which a pair is skipped, m/s.
     pub epsilon: f64,
+    /// The integration step the forces will be applied over, s (see [`apply_contacts`]).
+    pub dt: f64,
+}
+
+/// One pair of segments in contact: where, and the unscaled eq. 1 and eq. 2 forces on `a`.
+#[derive(Debug, Clone, Copy)]
+pub struct Contact {
+    pub a: u32,
+    pub b: u32,
+    /// Closest points as fractions from parent (0) to child (1) on `a` and `b`.
+    pub s: f64,
+    pub t: f64,
+    /// Friction (eq. 1) and repulsion (eq. 2) on `a`; `b` gets the opposite.
+    pub friction: Vector3<f64>,
+    pub repulsion: Vector3<f64>,
+    /// The mass in k_f = α·m and k_r·m (the lighter child).
+    pub mass: f64,
 }
 
 impl ContactParams {
@@ -176,6 +193,9 @@ pub struct HairCollider {
     /// Segment indices, grouped by cell, ascending within a cell.
     items: Vec<u32>,
     grid: GridInfo,
+    contacts: Vec<Contact>,
+    load: Vec<f64>,
+    node_mass: Vec<f64>,
 }
 
 impl HairCollider {
@@ -194,6 +214,8 @@ impl HairCollider {
             + self.hi.capacity() * std::mem::size_of::<[u32; 3]>()
             + self.cell_start.capacity() * 4
             + self.items.capacity() * 4
+            + self.contacts.capacity() * std::mem::size_of::<Contact>()
+            + (self.load.capacity() + self.node_mass.capacity()) * 8
     }
 
     /// Adds the hair–hair friction and repulsion forces to `force` (indexed by slot).
@@ -215,6 +237,7 @@ impl HairCollider {
             "too many segments for u32 indices: {n}"
         );
         self.build_grid(segs, pos);
+        self.contacts.clear();
 
         let [dx, dy, dz] = self.grid.dims.map(|d| d as usize);
         let items = &self.items;
@@ -234,15 +257,25 @@ impl HairCollider {
                                 && lo_a[1].max(lo_b[1]) == here[1]
                                 && lo_a[2].max(lo_b[2]) == here[2]
                             {
-                                interact(
-                                    a as usize, b as usize, segs, pos, vel, p, force, &mut stats,
-                                );
+                                if let Some(c) =
+                                    interact(a as usize, b as usize, segs, pos, vel, p, &mut stats)
+                                {
+                                    self.contacts.push(c);
+                                }
                             }
                         }
                     }
                 }
             }
         }
+        apply_contacts(
+            &self.contacts,
+            segs,
+            p,
+            &mut self.node_mass,
+            &mut self.load,
+            force,
+        );
         stats
     }
 
@@ -343,12 +376,71 @@ pub fn accumulate_brute_force(
 ) -> PairStats {
     let mut stats = PairStats::default();
     let n = segs.len();
+    let mut contacts = Vec::new();
     for a in 0..n {
         for b in a + 1..n {
-            interact(a, b, segs, pos, vel, p, force, &mut stats);
+            contacts.extend(interact(a, b, segs, pos, vel, p, &mut stats));
         }
     }
+    apply_contacts(&contacts, segs, p, &mut Vec::new(), &mut Vec::new(), force);
     stats
+}
+
+/// Adds the contacts' forces to the nodes (eq. 3), limited so that a node touching many
+/// segments at once stays stable.
+///
+/// The AWT's `α·dt < 1` keeps ONE contact from reversing a relative velocity, but a node in a
+/// dense wisp touches dozens of segments in the same step and the explicit sum of their
+/// friction impulses overshoots (the hair explodes). Each node's load `W = Σ share·m/m_node`
+/// over its contacts is therefore computed first, and a pair's friction is scaled by
+/// `1 / max(1, 2·α·dt·W)` and its repulsion by `1 / max(1, 2·k_r·dt²·W)`, W the largest load
+/// among the pair's four nodes. The scale is the same on both sides, so forces still sum to
+/// zero; a lone contact (W ≤ 1) is untouched when `α·dt < 1/2`.
+pub fn apply_contacts(
+    contacts: &[Contact],
+    segs: &SegmentsView,
+    p: &ContactParams,
+    node_mass: &mut Vec<f64>,
+    load: &mut Vec<f64>,
+    force: &mut [Vector3<f64>],
+) {
+    let nodes = force.len();
+    // A slot's mass is its mass as a child; a slot that is never a child is a kinematic root,
+    // which no force moves (infinite mass, no load).
+    node_mass.clear();
+    node_mass.resize(nodes, f64::INFINITY);
+    for i in 0..segs.len() {
+        node_mass[segs.child[i] as usize] = segs.child_mass[i];
+    }
+    load.clear();
+    load.resize(nodes, 0.0);
+    for c in contacts {
+        let (a, b) = (c.a as usize, c.b as usize);
+        for (n, share) in [
+            (segs.parent[a], 1.0 - c.s),
+            (segs.child[a], c.s),
+            (segs.parent[b], 1.0 - c.t),
+            (segs.child[b], c.t),
+        ] {
+            load[n as usize] += share * c.mass / node_mass[n as usize];
+        }
+    }
+    for c in contacts {
+        let (a, b) = (c.a as usize, c.b as usize);
+        let (pa, ca) = (segs.parent[a] as usize, segs.child[a] as usize);
+        let (pb, cb) = (segs.parent[b] as usize, segs.child[b] as usize);
+        let w = load[pa].max(load[ca]).max(load[pb]).max(load[cb]);
+        let fric = 1.0 / (2.0 * p.friction * p.dt * w).max(1.0);
+        let rep = 1.0 / (2.0 * p.repulsion * p.dt * p.dt * w).max(1.0);
+        let f = c.friction * fric + c.repulsion * rep;
+        // Eq. 3: F at P = (1 − s)·N_p + s·N_c goes (1 − s)·F to the parent, s·F to the child.
+        let fa_child = f * c.s;
+        force[pa] += f - fa_child;
+        force[ca] += fa_child;
+        let fb_child = f * c.t;
+        force[pb] -= f - fb_child;
+        force[cb] -= fb_child;
+    }
 }
 
 /// Axis-aligned box of segment `i` inflated by its radius.
@@ -365,7 +457,7 @@ fn inflated_box(
 }
 
 /// Tests one pair of segments (`a < b` so that both grid and reference compute bit-identical
-/// pair forces) and adds its response to `force`.
+/// pair forces) and returns the contact, if any.
 #[allow(clippy::too_many_arguments)]
 #[inline]
 fn interact(
@@ -375,14 +467,13 @@ fn interact(
     pos: &[Vector3<f64>],
     vel: &[Vector3<f64>],
     p: &ContactParams,
-    force: &mut [Vector3<f64>],
     stats: &mut PairStats,
-) {
+) -> Option<Contact> {
     let (pa, ca) = (segs.parent[a] as usize, segs.child[a] as usize);
     let (pb, cb) = (segs.parent[b] as usize, segs.child[b] as usize);
     // Adjacent segments (a chain, or siblings on one parent) always touch: never test them.
     if pa == pb || pa == cb || ca == pb || ca == cb {
-        return;
+        return None;
     }
     let (vpa, vca, vpb, vcb) = (vel[pa], vel[ca], vel[pb], vel[cb]);
     // Bound on every point-to-point relative speed (see module docs).
@@ -392,7 +483,7 @@ fn interact(
         .max((vca - vpb).norm_squared())
         .max((vca - vcb).norm_squared());
     if rel2 < p.epsilon * p.epsilon {
-        return;
+        return None;
     }
     stats.tested += 1;
     let (xpa, xca, xpb, xcb) = (pos[pa], pos[ca], pos[pb], pos[cb]);
@@ -403,7 +494,7 @@ fn interact(
     let (lo_a, hi_a) = (xpa.inf(&xca), xpa.sup(&xca));
     let (lo_b, hi_b) = (xpb.inf(&xcb), xpb.sup(&xcb));
     if (0..3).any(|k| lo_a[k] - hi_b[k] > r || lo_b[k] - hi_a[k] > r) {
-        return;
+        return None;
     }
     let (s, t) = closest_segment_params(&xpa, &xca, &xpb, &xcb);
     let d1 = xca - xpa;
@@ -413,7 +504,7 @@ fn interact(
     let delta = p1 - p2;
     let dist2 = delta.norm_squared();
     if dist2 >= r * r {
-        return;
+        return None;
     }
     stats.in_contact += 1;
     let m = segs.child_mass[a].min(segs.child_mass[b]);
@@ -421,7 +512,8 @@ fn interact(
     // Eq. 1: viscous friction at the closest points.
     let v1 = vpa * (1.0 - s) + vca * s;
     let v2 = vpb * (1.0 - t) + vcb * t;
-    let mut f = (v2 - v1) * (p.friction * m);
+    let friction = (v2 - v1) * (p.friction * m);
+    let mut repulsion = Vector3::zeros();
 
     // Eq. 2: repulsion only between wisps crossing at a large enough angle.
     let len2 = d1.norm_squared() * d2.norm_squared();
@@ -438,16 +530,18 @@ fn interact(
             let mid = (xpa + xca - xpb - xcb) * 0.5;
             degenerate_normal(&d1, &d2, &mid)
         };
-        f += n * (p.repulsion * m * (r - d));
+        repulsion = n * (p.repulsion * m * (r - d));
     }
 
-    // Eq. 3: F at P = (1 − s)·N_p + s·N_c goes (1 − s)·F to the parent, s·F to the child.
-    let fa_child = f * s;
-    force[pa] += f - fa_child;
-    force[ca] += fa_child;
-    let fb_child = f * t;
-    force[pb] -= f - fb_child;
-    force[cb] -= fb_child;
+    Some(Contact {
+        a: a as u32,
+        b: b as u32,
+        s,
+        t,
+        friction,
+        repulsion,
+        mass: m,
+    })
 }
 
 /// Unit normal for intersecting axes: perpendicular to both, pointing to the side of `mid`

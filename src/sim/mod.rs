@@ -112,6 +112,8 @@ pub struct Simulation {
     pub slots: Slots,
     time: f64,
     steps: u64,
+    /// While settling, the pose stays at t = 0 and the tree does not adapt.
+    settling: bool,
     pose: Pose,
     collider: collide::HairCollider,
     spheres: Vec<collide::BodySphere>,
@@ -149,6 +151,7 @@ impl Simulation {
             slots: Slots::default(),
             time: 0.0,
             steps: 0,
+            settling: false,
             pose,
             collider: collide::HairCollider::new(),
             spheres: Vec::new(),
@@ -156,7 +159,35 @@ impl Simulation {
             adapt_scratch: awt::AdaptScratch::default(),
         };
         sim.gather();
+        sim.settle();
         sim
+    }
+
+    /// Lets the hair hang in the starting pose for `params.settle` seconds, then starts the
+    /// clock at 0 with everything at rest.
+    fn settle(&mut self) {
+        let steps = (self.params.settle / self.params.dt).round() as usize;
+        if steps == 0 {
+            return;
+        }
+        self.settling = true;
+        let mut report = StepReport::default();
+        for _ in 0..steps {
+            self.step(&mut report);
+        }
+        self.settling = false;
+        self.time = 0.0;
+        self.steps = 0;
+        let s = &mut self.slots;
+        for c in 0..s.len() {
+            if s.parent[c] != NO_SLOT {
+                s.vel[c] = Vector3::zeros();
+            }
+            s.acc[c] = Vector3::zeros();
+        }
+        dynamics::pose_roots(&self.model, &self.pose, &mut self.slots);
+        self.scatter();
+        self.forest.follow_all(&self.model, &self.pose);
     }
 
     /// A simulation with the style's own parameters.
@@ -286,7 +317,7 @@ impl Simulation {
 
         // Pose: roots and body spheres move with the character.
         let clock = Instant::now();
-        self.pose = self.motion.pose(t_new);
+        self.pose = self.motion.pose(if self.settling { 0.0 } else { t_new });
         self.spheres.clear();
         for sp in &self.model.body {
             let c = self
@@ -322,6 +353,7 @@ impl Simulation {
                 repulsion: self.params.repulsion,
                 cos_angle_threshold: self.params.angle_threshold.to_radians().cos(),
                 epsilon: self.params.contact_epsilon,
+                dt,
             };
             self.collider
                 .accumulate(&view, &s.pos, &s.vel, &cp, &mut s.force)
@@ -371,7 +403,7 @@ impl Simulation {
         self.steps += 1;
 
         let clock = Instant::now();
-        if !self.single_level {
+        if !self.single_level && !self.settling {
             self.scatter();
             let changed = awt::adapt(
                 &self.model,

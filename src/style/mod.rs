@@ -301,6 +301,10 @@ pub fn validate(style: &Style) -> Result<(), Invalid> {
     non_negative(s.air_drag, "sim.air_drag")?;
     non_negative(s.bending, "sim.bending")?;
     non_negative(s.contact_epsilon, "sim.contact_epsilon")?;
+    non_negative(s.settle, "sim.settle")?;
+    check(s.settle <= 60.0, "sim.settle", || {
+        format!("at most 60 s of settling, got {}", s.settle)
+    })?;
     check(
         s.accel_smoothing > 0.0 && s.accel_smoothing <= 1.0,
         "sim.accel_smoothing",

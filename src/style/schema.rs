@@ -385,6 +385,11 @@ pub struct SimParams {
     /// Default 1e-3.
     #[serde(default = "d_contact_epsilon")]
     pub contact_epsilon: f64,
+    /// Seconds of settling before the animation starts: the hair hangs under gravity in the
+    /// starting pose, adaptation off, then starts at rest (AWT §2.3: "often at rest"), so the
+    /// styled shape relaxing is not mistaken for motion by the split test. Default 1.
+    #[serde(default = "d_settle")]
+    pub settle: f64,
     /// Smoothing of the acceleration used by the split test: the exponential moving-average
     /// weight of the newest step, in (0, 1]. Default 0.5.
     #[serde(default = "d_accel_smoothing")]
@@ -408,6 +413,7 @@ impl Default for SimParams {
             bending: d_bending(),
             contact_epsilon: d_contact_epsilon(),
             accel_smoothing: d_accel_smoothing(),
+            settle: d_settle(),
         }
     }
 }
@@ -447,6 +453,9 @@ fn d_bending() -> f64 {
 }
 fn d_contact_epsilon() -> f64 {
     1e-3
+}
+fn d_settle() -> f64 {
+    1.0
 }
 fn d_accel_smoothing() -> f64 {
     0.5
