@@ -86,3 +86,144 @@ pub struct Frame {
     /// Number of levels of detail of the model (for the annotation context).
     pub levels: u16,
 }
+
+/// Fills `Frame`s from a simulation. Owns the strand subset and scratch buffers, so building a
+/// frame allocates nothing once warm.
+pub struct FrameBuilder {
+    /// The strands drawn, a deterministic evenly spread subset.
+    strands: Vec<u32>,
+    /// Points per strand segment after Catmull-Rom smoothing (1 = the K nodes only).
+    subdivisions: usize,
+    scratch: Vec<nalgebra::Vector3<f64>>,
+}
+
+impl FrameBuilder {
+    /// Draws `n` strands (all of them if `n` is larger), smoothed with `subdivisions` points per
+    /// span.
+    pub fn new(model: &crate::model::HairModel, n: usize, subdivisions: usize) -> FrameBuilder {
+        let total = model.strands.len();
+        let n = n.min(total);
+        // Evenly spaced over the strands, which are grouped by finest GC: every wisp shows.
+        let strands = (0..n).map(|j| ((j * total) / n.max(1)) as u32).collect();
+        FrameBuilder {
+            strands,
+            subdivisions: subdivisions.max(1),
+            scratch: Vec::new(),
+        }
+    }
+
+    pub fn strand_count(&self) -> usize {
+        self.strands.len()
+    }
+
+    /// Overwrites `f`'s geometry with the simulation's current state. Counters, events and
+    /// messages are the caller's.
+    pub fn fill(&mut self, sim: &mut crate::sim::Simulation, f: &mut Frame) {
+        use nalgebra::{Point3, Vector3};
+        sim.update_followers();
+        let to32 = |v: &Vector3<f64>| [v.x as f32, v.y as f32, v.z as f32];
+        f.sim_time = sim.time();
+        f.levels = sim.model.level_count() as u16;
+
+        let s = &sim.slots;
+        f.nodes.positions.clear();
+        f.nodes.radii.clear();
+        f.nodes.levels.clear();
+        f.segments.starts.clear();
+        f.segments.ends.clear();
+        f.segments.radii.clear();
+        f.segments.levels.clear();
+        for c in 0..s.len() {
+            f.nodes.positions.push(to32(&s.pos[c]));
+            f.nodes.radii.push(s.radius[c] as f32);
+            f.nodes.levels.push(s.level[c] as u16);
+            let p = s.parent[c];
+            if p != crate::sim::NO_SLOT {
+                f.segments.starts.push(to32(&s.pos[p as usize]));
+                f.segments.ends.push(to32(&s.pos[c]));
+                f.segments.radii.push(s.radius[c] as f32);
+                f.segments.levels.push(s.level[c] as u16);
+            }
+        }
+
+        f.strands.points.clear();
+        f.strands.offsets.clear();
+        f.strands.offsets.push(0);
+        for &st in &self.strands {
+            self.scratch.clear();
+            sim.strand_points(st as usize, &mut self.scratch);
+            catmull_rom(&self.scratch, self.subdivisions, &mut f.strands.points);
+            f.strands.offsets.push(f.strands.points.len() as u32);
+        }
+
+        let pose = sim.pose();
+        let m = &sim.model;
+        f.body.sphere_centers.clear();
+        f.body.sphere_radii.clear();
+        for sp in &m.body {
+            let c = pose.transform_point(&Point3::from(Vector3::from(sp.center)));
+            f.body.sphere_centers.push(to32(&c.coords));
+            f.body.sphere_radii.push(sp.radius as f32);
+        }
+        let c = pose.transform_point(&Point3::from(m.scalp_center));
+        f.body.scalp_center = to32(&c.coords);
+        f.body.scalp_radii = to32(&m.scalp_radii);
+        let q = pose.iso.rotation;
+        f.body.scalp_rotation = [q.i as f32, q.j as f32, q.k as f32, q.w as f32];
+    }
+}
+
+/// Appends a uniform Catmull-Rom spline through `p` with `sub` points per span (the control
+/// points themselves included, the last one once).
+pub fn catmull_rom(p: &[nalgebra::Vector3<f64>], sub: usize, out: &mut Vec<[f32; 3]>) {
+    let n = p.len();
+    let to32 = |v: nalgebra::Vector3<f64>| [v.x as f32, v.y as f32, v.z as f32];
+    if n < 3 || sub <= 1 {
+        out.extend(p.iter().map(|v| to32(*v)));
+        return;
+    }
+    for i in 0..n - 1 {
+        let p0 = if i == 0 { p[0] * 2.0 - p[1] } else { p[i - 1] };
+        let (p1, p2) = (p[i], p[i + 1]);
+        let p3 = if i + 2 < n {
+            p[i + 2]
+        } else {
+            p[n - 1] * 2.0 - p[n - 2]
+        };
+        for j in 0..sub {
+            let t = j as f64 / sub as f64;
+            let (t2, t3) = (t * t, t * t * t);
+            let v = (p1 * 2.0
+                + (p2 - p0) * t
+                + (p0 * 2.0 - p1 * 5.0 + p2 * 4.0 - p3) * t2
+                + (p1 * 3.0 - p0 - p2 * 3.0 + p3) * t3)
+                * 0.5;
+            out.push(to32(v));
+        }
+    }
+    out.push(to32(p[n - 1]));
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nalgebra::Vector3;
+
+    #[test]
+    fn catmull_rom_interpolates_its_control_points() {
+        let p: Vec<Vector3<f64>> = (0..5)
+            .map(|i| Vector3::new(i as f64, (i as f64).sin(), 0.0))
+            .collect();
+        let mut out = Vec::new();
+        catmull_rom(&p, 4, &mut out);
+        assert_eq!(out.len(), 4 * 4 + 1);
+        for (i, q) in p.iter().enumerate() {
+            let o = out[i * 4];
+            assert!((o[0] as f64 - q.x).abs() < 1e-6 && (o[1] as f64 - q.y).abs() < 1e-6);
+        }
+        // Between control points it is smooth, not the chord: the midpoint bulges.
+        let mid = out[2];
+        let chord = (p[0] + p[1]) * 0.5;
+        assert!((mid[1] as f64 - chord.y).abs() > 1e-3);
+    }
+}
