@@ -1,0 +1,500 @@
+//! `wisptree run` without a viewer: short recordings into files (decoded with the SDK's own
+//! `.rrd` decoder and checked with the real CLI when it is there), style hot-reload, stopping
+//! mid-run the way Ctrl-C does, and the binary's exit code on bad input.
+
+use std::collections::BTreeMap;
+use std::io::BufReader;
+use std::path::{Path, PathBuf};
+use std::time::{Duration, Instant};
+
+use rerun::external::re_log_types::LogMsg;
+use rerun::log::Chunk;
+use rerun::{ComponentIdentifier, LineStrips3D, Points3D, Scalars, TextLog, TimelineName};
+use wisptree::frame::Frame;
+use wisptree::run::{self, RunArgs, Setup, SinkArgs, StopSignal};
+use wisptree::sim::report::{EventKind, StepReport};
+use wisptree::stream::paths;
+use wisptree::tune::{self, StyleChange};
+
+/// A small generated style: 4 top-level wisps, 2 levels, K = 8, about 300 strands. Simulates a
+/// second in a fraction of a second, and splits under `shake`.
+const TINY: &str = r#"Style(
+    name: "tiny",
+    seed: 7,
+    hair: Generated((
+        density: 3.0,
+        samples: 12,
+        wisps: [
+        (
+            name: "back",
+            region: (azimuth: (140, 220), elevation: (0, 70)),
+            tiles: (2, 2),
+            key_strand: [(0.03, 0.0, 0.0), (0.08, 0.02, 0.0), (0.16, 0.04, 0.0), (0.24, 0.05, 0.0)],
+            tip_spread: 0.01,
+        ),
+        ],
+    )),
+    hierarchy: (levels: 2, cross_sections: 8, branching: [4]),
+    link: Rigid(iterations: 8),
+    sim: (split_threshold: SPLIT, merge_velocity: 0.05),
+)
+"#;
+
+fn tiny_style(split: &str) -> String {
+    TINY.replace("SPLIT", split)
+}
+
+const MOTION: &str = "shake";
+const STRANDS: usize = 20;
+
+fn write_style(dir: &Path, split: &str) -> PathBuf {
+    let p = dir.join("tiny.ron");
+    std::fs::write(&p, tiny_style(split)).unwrap();
+    p
+}
+
+fn args(style: &Path, out: &Path, seconds: f64, watch: bool) -> RunArgs {
+    RunArgs {
+        style: style.to_path_buf(),
+        motion: MOTION.to_owned(),
+        seconds: Some(seconds),
+        strands: STRANDS,
+        single_level: false,
+        watch,
+        no_watch: !watch,
+        sink: SinkArgs {
+            save: Some(out.to_path_buf()),
+            ..SinkArgs::default()
+        },
+    }
+}
+
+/// The recording's (non-blueprint) chunks, decoded from the file with the SDK's decoder.
+fn decode_file(path: &Path) -> Vec<Chunk> {
+    let file = std::fs::File::open(path).expect("the recording exists");
+    let mut chunks = Vec::new();
+    for msg in rerun::external::re_log_encoding::DecoderApp::decode_lazy(BufReader::new(file)) {
+        match msg.expect("every message decodes") {
+            LogMsg::ArrowMsg(store, arrow) if !store.is_blueprint() => {
+                chunks.push(Chunk::from_arrow_msg(&arrow).expect("chunk decodes"));
+            }
+            _ => {}
+        }
+    }
+    assert!(!chunks.is_empty(), "{}: no data", path.display());
+    chunks
+}
+
+/// `(frame, instance count)` of every row holding `component` at `path`, in frame order.
+fn rows(chunks: &[Chunk], path: &str, component: ComponentIdentifier) -> Vec<(i64, usize)> {
+    let path: rerun::EntityPath = path.into();
+    let timeline = TimelineName::from("frame");
+    let mut out = Vec::new();
+    for c in chunks.iter().filter(|c| *c.entity_path() == path) {
+        for ((t, _), span) in c
+            .iter_component_indices(timeline, component)
+            .zip(c.iter_component_offsets(component))
+        {
+            out.push((t.as_i64(), span.len));
+        }
+    }
+    out.sort();
+    out
+}
+
+/// `(frame, value)` of a scalar series.
+fn scalars(chunks: &[Chunk], path: &str) -> Vec<(i64, f64)> {
+    let path: rerun::EntityPath = path.into();
+    let timeline = TimelineName::from("frame");
+    let component = Scalars::descriptor_scalars().component;
+    let mut out = Vec::new();
+    for c in chunks.iter().filter(|c| *c.entity_path() == path) {
+        for ((t, _), v) in c
+            .iter_component_indices(timeline, component)
+            .zip(c.iter_component::<rerun::components::Scalar>(component))
+        {
+            out.push((t.as_i64(), v.as_slice()[0].0 .0));
+        }
+    }
+    out.sort_by_key(|a| a.0);
+    out
+}
+
+fn texts(chunks: &[Chunk], path: &str) -> Vec<String> {
+    let path: rerun::EntityPath = path.into();
+    let component = TextLog::descriptor_text().component;
+    let mut out = Vec::new();
+    for c in chunks.iter().filter(|c| *c.entity_path() == path) {
+        for item in c.iter_component::<rerun::components::Text>(component) {
+            out.extend(item.iter().map(|t| t.as_str().to_owned()));
+        }
+    }
+    out
+}
+
+/// Runs the real Rerun CLI's `rrd verify` on `path`, if the tool is installed here.
+fn verify_with_cli(path: &Path) {
+    let tool = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/tools/rerun-cli");
+    if !tool.exists() {
+        eprintln!(
+            "skipping `rerun rrd verify`: {} is not installed",
+            tool.display()
+        );
+        return;
+    }
+    let out = std::process::Command::new(&tool)
+        .args(["rrd", "verify"])
+        .arg(path)
+        .output()
+        .expect("running rerun-cli");
+    assert!(
+        out.status.success(),
+        "rrd verify failed: {}\n{}",
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
+#[test]
+fn a_short_recording_holds_every_path_one_row_per_frame_and_the_events_of_each_frame() {
+    let dir = tempfile::tempdir().unwrap();
+    let style = write_style(dir.path(), "0.2");
+    let out = dir.path().join("out.rrd");
+    let seconds = 1.0;
+    let summary = run::run_with(args(&style, &out, seconds, false), StopSignal::new())
+        .expect("the run succeeds");
+    let frames = 25; // 1 s of 4 × 10 ms frames
+    assert_eq!(summary.frames_logged, frames);
+    assert_eq!(summary.frames_dropped, 0);
+    assert!(!summary.interrupted);
+    verify_with_cli(&out);
+    let chunks = decode_file(&out);
+
+    let seen: BTreeMap<String, ()> = chunks
+        .iter()
+        .map(|c| (c.entity_path().to_string(), ()))
+        .collect();
+    for p in [
+        paths::NODES,
+        paths::SEGMENTS,
+        paths::STRANDS,
+        paths::BODY_SPHERES,
+        paths::SCALP,
+        paths::SPLITS,
+        paths::LOG,
+        paths::STAT_SPLITS,
+        paths::STAT_MERGES,
+        paths::KINETIC_ENERGY,
+        paths::STEP_MS,
+        paths::DROPPED_FRAMES,
+        paths::SPLIT_THRESHOLD,
+        paths::MERGE_VELOCITY,
+        &paths::active_nodes_level(0),
+        &paths::active_nodes_level(1),
+    ] {
+        assert!(seen.contains_key(p), "{p} missing; seen {seen:?}");
+    }
+
+    // One row per frame, frames 0..25 in order, for the nodes and the strands; exactly STRANDS
+    // strands in each.
+    let node_rows = rows(
+        &chunks,
+        paths::NODES,
+        Points3D::descriptor_positions().component,
+    );
+    assert_eq!(
+        node_rows.iter().map(|r| r.0).collect::<Vec<_>>(),
+        (0..frames as i64).collect::<Vec<_>>()
+    );
+    assert!(node_rows.iter().all(|r| r.1 > 0));
+    let strand_rows = rows(
+        &chunks,
+        paths::STRANDS,
+        LineStrips3D::descriptor_strips().component,
+    );
+    assert_eq!(
+        strand_rows,
+        (0..frames as i64).map(|f| (f, STRANDS)).collect::<Vec<_>>()
+    );
+
+    // The same inputs, simulated here without threads: the simulation is deterministic, so
+    // every frame must show exactly the events this simulation reports in that frame's steps.
+    let setup = Setup::load(&style, MOTION, false, STRANDS).unwrap();
+    let mut sim = setup.simulation();
+    let mut report = StepReport::default();
+    let mut expected_splits = Vec::new();
+    let mut expected_merges = Vec::new();
+    for f in 0..frames as i64 {
+        for _ in 0..sim.params.steps_per_frame {
+            sim.step(&mut report);
+            for e in &report.events {
+                match e.kind {
+                    EventKind::Split => expected_splits.push((f, 1)),
+                    EventKind::Merge => expected_merges.push((f, 1)),
+                }
+            }
+        }
+    }
+    assert!(
+        !expected_splits.is_empty(),
+        "the fixture should split under {MOTION}"
+    );
+    let text = TextLog::descriptor_text().component;
+    assert_eq!(rows(&chunks, paths::SPLITS, text), expected_splits);
+    assert_eq!(rows(&chunks, paths::MERGES, text), expected_merges);
+    assert_eq!(summary.splits as usize, expected_splits.len());
+    // And the per-frame split counts agree with the /stats series.
+    let stat: Vec<(i64, f64)> = scalars(&chunks, paths::STAT_SPLITS);
+    for (f, n) in stat {
+        let want = expected_splits.iter().filter(|e| e.0 == f).count();
+        assert_eq!(n as usize, want, "frame {f}");
+    }
+}
+
+#[test]
+fn the_simulation_loop_fills_frames_like_a_plain_simulation() {
+    // The frame-stepping helper used by the simulation thread: events in order, counts right.
+    let dir = tempfile::tempdir().unwrap();
+    let style = write_style(dir.path(), "0.2");
+    let setup = Setup::load(&style, MOTION, false, STRANDS).unwrap();
+    let mut a = setup.simulation();
+    let mut b = setup.simulation();
+    let mut ra = StepReport::default();
+    let mut rb = StepReport::default();
+    let mut frame = Frame::default();
+    let mut total = 0;
+    for _ in 0..25 {
+        run::step_frame(&mut a, &mut ra, &mut frame);
+        let mut events = Vec::new();
+        for _ in 0..b.params.steps_per_frame {
+            b.step(&mut rb);
+            events.extend(rb.events.iter().cloned());
+        }
+        assert_eq!(frame.events, events);
+        assert_eq!(frame.splits + frame.merges, events.len() as u32);
+        assert_eq!(
+            frame.counters.active_per_level,
+            rb.counters.active_per_level
+        );
+        total += events.len();
+    }
+    assert!(total > 0);
+}
+
+#[test]
+fn reloading_the_style_changes_the_split_threshold_of_the_next_steps_and_broken_edits_change_nothing(
+) {
+    let dir = tempfile::tempdir().unwrap();
+    let style = write_style(dir.path(), "0.2");
+    let setup = Setup::load(&style, MOTION, false, STRANDS).unwrap();
+    let current = setup.loaded.style.clone();
+
+    // Unchanged text: nothing to do.
+    assert!(matches!(
+        tune::reload(&style, &current),
+        StyleChange::Unchanged
+    ));
+
+    // A threshold so high nothing can split: a parameter change, applied in place.
+    std::fs::write(&style, tiny_style("1.0e6")).unwrap();
+    let new = match tune::reload(&style, &current) {
+        StyleChange::Params(l) => l,
+        other => panic!("expected new parameters, got {other:?}"),
+    };
+    assert_eq!(new.style.sim.split_threshold, 1.0e6);
+
+    let count_splits = |sim: &mut wisptree::sim::Simulation| {
+        let mut r = StepReport::default();
+        let mut n = 0;
+        for _ in 0..100 {
+            sim.step(&mut r);
+            n += r
+                .events
+                .iter()
+                .filter(|e| e.kind == EventKind::Split)
+                .count();
+        }
+        n
+    };
+    let mut before = setup.simulation();
+    assert!(count_splits(&mut before) > 0);
+    let mut after = setup.simulation();
+    after.set_tunables(wisptree::sim::Tunables {
+        params: new.style.sim.clone(),
+        link: new.style.link.clone(),
+    });
+    assert_eq!(after.params.split_threshold, 1.0e6);
+    assert_eq!(count_splits(&mut after), 0);
+
+    // Broken edits: a syntax error and an invalid value. Both are errors naming the file, and
+    // the caller keeps its style.
+    std::fs::write(&style, "Style(hair: ").unwrap();
+    match tune::reload(&style, &current) {
+        StyleChange::Invalid(e) => assert!(e.to_string().contains("tiny.ron"), "{e}"),
+        other => panic!("expected an error, got {other:?}"),
+    }
+    std::fs::write(&style, tiny_style("-1.0")).unwrap();
+    match tune::reload(&style, &current) {
+        StyleChange::Invalid(e) => {
+            assert!(e.to_string().contains("split_threshold"), "{e}")
+        }
+        other => panic!("expected an error, got {other:?}"),
+    }
+    assert_eq!(current.sim.split_threshold, 0.2);
+
+    // A geometry change builds a new model.
+    std::fs::write(
+        &style,
+        tiny_style("0.2").replace("cross_sections: 8", "cross_sections: 6"),
+    )
+    .unwrap();
+    match tune::reload(&style, &current) {
+        StyleChange::Geometry(b) => assert_eq!(b.1.k, 6),
+        other => panic!("expected a new model, got {other:?}"),
+    }
+}
+
+/// Waits until `cond` or the deadline; false on timeout.
+fn wait_for(deadline: Duration, mut cond: impl FnMut() -> bool) -> bool {
+    let t = Instant::now();
+    while t.elapsed() < deadline {
+        if cond() {
+            return true;
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    false
+}
+
+#[test]
+fn saving_the_watched_style_changes_the_threshold_logged_in_later_frames() {
+    let dir = tempfile::tempdir().unwrap();
+    let style = write_style(dir.path(), "0.2");
+    let out = dir.path().join("watch.rrd");
+    let stop = StopSignal::new();
+    let editor = {
+        let style = style.clone();
+        let out = out.clone();
+        let stop = stop.clone();
+        std::thread::spawn(move || {
+            // Once the run is under way (the file exists), save an edit the way editors that
+            // replace the file do: write a new file and rename it over the old one.
+            assert!(wait_for(Duration::from_secs(20), || out.exists()));
+            std::thread::sleep(Duration::from_millis(300));
+            let tmp = style.with_extension("ron.tmp");
+            std::fs::write(&tmp, tiny_style("0.7")).unwrap();
+            std::fs::rename(&tmp, &style).unwrap();
+            // Then a broken edit, which must leave 0.7 in force.
+            std::thread::sleep(Duration::from_millis(600));
+            std::fs::write(&style, "Style(").unwrap();
+            std::thread::sleep(Duration::from_millis(600));
+            stop.stop();
+        })
+    };
+    let summary = run::run_with(args(&style, &out, 1.0e5, true), stop).expect("run");
+    editor.join().unwrap();
+    assert!(summary.interrupted);
+    assert_eq!(summary.reloads, 1, "{summary:?}");
+
+    let chunks = decode_file(&out);
+    let thresholds = scalars(&chunks, paths::SPLIT_THRESHOLD);
+    assert_eq!(thresholds.len() as u64, summary.frames_logged);
+    assert_eq!(thresholds[0].1, 0.2);
+    let first_new = thresholds
+        .iter()
+        .position(|t| t.1 == 0.7)
+        .expect("the reloaded threshold shows in /params");
+    // From then on, the new value only: the broken edit changed nothing.
+    assert!(thresholds[..first_new].iter().all(|t| t.1 == 0.2));
+    assert!(thresholds[first_new..].iter().all(|t| t.1 == 0.7));
+    let log = texts(&chunks, paths::LOG).join("\n");
+    assert!(
+        log.contains("split_threshold 0.2 → 0.7"),
+        "reload not in the log:\n{log}"
+    );
+    assert!(log.contains("not applied"), "no warning in the log:\n{log}");
+}
+
+#[test]
+fn a_recording_stopped_mid_run_like_ctrl_c_is_complete_and_valid() {
+    let dir = tempfile::tempdir().unwrap();
+    let style = write_style(dir.path(), "0.2");
+    let out = dir.path().join("stopped.rrd");
+    let stop = StopSignal::new();
+    let stopper = {
+        let stop = stop.clone();
+        let out = out.clone();
+        std::thread::spawn(move || {
+            assert!(wait_for(Duration::from_secs(20), || out.exists()));
+            std::thread::sleep(Duration::from_millis(400));
+            // What the Ctrl-C handler and the `q` key do.
+            stop.stop();
+        })
+    };
+    let seconds = 1.0e5;
+    let summary = run::run_with(args(&style, &out, seconds, false), stop).expect("run");
+    stopper.join().unwrap();
+    assert!(summary.interrupted);
+    assert!(summary.frames_logged > 0);
+    assert!(summary.sim_time < seconds);
+    verify_with_cli(&out);
+    let chunks = decode_file(&out);
+    // No frame lost: every frame the run counted is in the file, in order.
+    let node_rows = rows(
+        &chunks,
+        paths::NODES,
+        Points3D::descriptor_positions().component,
+    );
+    assert_eq!(
+        node_rows.iter().map(|r| r.0).collect::<Vec<_>>(),
+        (0..summary.frames_logged as i64).collect::<Vec<_>>()
+    );
+}
+
+#[test]
+fn the_binary_exits_2_naming_a_missing_style_or_a_bad_motion() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("never.rrd");
+    let bin = env!("CARGO_BIN_EXE_wisptree");
+    let missing = dir.path().join("missing.ron");
+    let o = std::process::Command::new(bin)
+        .arg("run")
+        .arg("--style")
+        .arg(&missing)
+        .arg("--save")
+        .arg(&out)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(err.contains("missing.ron"), "{err}");
+    assert!(!err.contains("panicked"), "{err}");
+    // Nothing was recorded for a run that never started.
+    assert!(!out.exists());
+
+    let style = write_style(dir.path(), "0.2");
+    let o = std::process::Command::new(bin)
+        .arg("--style")
+        .arg(&style)
+        .args(["--motion", "moonwalk", "--save"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(err.contains("moonwalk"), "{err}");
+
+    for (bad, says) in [
+        ("--seconds=-1", "positive number"),
+        ("--seconds=inf", "positive number"),
+        ("--strands=0", "at least one strand"),
+    ] {
+        let o = std::process::Command::new(bin)
+            .args(["run", bad])
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{bad}: {err}");
+        assert!(err.contains(says), "{bad}: {err}");
+    }
+}
