@@ -65,6 +65,8 @@ const VIEWER_CONNECT_TIMEOUT: Duration = Duration::from_secs(15);
 /// How long, after stopping, the logger may take to hand over what is queued before the run
 /// returns anyway (a viewer that stopped reading must not hang the process).
 const LOGGER_FINISH_TIMEOUT: Duration = Duration::from_secs(20);
+/// The same, once the viewer is known to be gone.
+const LOST_VIEWER_FINISH_TIMEOUT: Duration = Duration::from_secs(2);
 /// Flush timeout for live sinks at the end.
 const LIVE_FLUSH_TIMEOUT: Duration = Duration::from_secs(5);
 /// Poll period of the main thread (keys, watcher, viewer status).
@@ -417,6 +419,21 @@ fn style_name(l: &LoadedStyle) -> String {
     }
 }
 
+/// Where the camera looks: the middle of the range the scalp centre sweeps during the first
+/// seconds of the motion, so a motion that carries the head away (lean: 35° about the hips, a
+/// third of a metre) stays in view instead of leaving the frame on one side.
+pub fn camera_target(setup: &Setup) -> [f32; 3] {
+    let rest = Point3::from(setup.model.scalp_center);
+    let (mut lo, mut hi) = (rest.coords, rest.coords);
+    for k in 0..=50 {
+        let p = setup.motion.pose(k as f64 * 0.1).transform_point(&rest);
+        lo = lo.inf(&p.coords);
+        hi = hi.sup(&p.coords);
+    }
+    let c = (lo + hi) * 0.5;
+    [c.x as f32, c.y as f32, c.z as f32]
+}
+
 /// How the loop runs.
 #[derive(Debug, Clone)]
 pub struct LoopOptions {
@@ -490,6 +507,7 @@ pub fn run_with(args: RunArgs, stop: StopSignal) -> anyhow::Result<RunSummary> {
         sink.description
     ));
     match seconds {
+        _ if sink.fell_back => {}
         Some(s) => console.say(&format!("simulating {s} s")),
         None => console.say("simulating until Ctrl-C (or q)"),
     }
@@ -612,8 +630,7 @@ fn simulate(
         let stop = stop.clone();
         let name = setup.style_name();
         let levels = setup.model.level_count() as u16;
-        let c = setup.model.scalp_center;
-        let head = [c.x as f32, c.y as f32, c.z as f32];
+        let head = camera_target(setup);
         let live = opts.live;
         std::thread::Builder::new()
             .name("wisptree-logger".into())
@@ -683,6 +700,7 @@ fn simulate(
     let mut file_style = setup.loaded.clone();
     let mut summary = RunSummary::default();
     let mut key_error_reported = false;
+    let mut never_connected: Option<String> = None;
     while !stop.is_stopped() && !sim_handle.is_finished() {
         if raw.is_some() {
             match poll_key(POLL) {
@@ -722,20 +740,26 @@ fn simulate(
             let lost = match g.status() {
                 GrpcSinkConnectionState::Disconnected(r) => Some(match r {
                     Ok(()) => "the viewer closed the connection".to_owned(),
-                    Err(e) => format!("lost the viewer ({e:?})"),
+                    Err(e) => format!("the viewer went away (connection lost: {e:?})"),
                 }),
                 GrpcSinkConnectionState::Connecting { started }
                     if started.elapsed() > VIEWER_CONNECT_TIMEOUT =>
                 {
-                    Some(format!(
-                        "no viewer accepted the connection within {} s",
+                    let msg = format!(
+                        "no Rerun viewer accepted the connection within {} s \
+                         (start one with `rerun`, or record with --save FILE)",
                         VIEWER_CONNECT_TIMEOUT.as_secs()
-                    ))
+                    );
+                    never_connected = Some(msg.clone());
+                    Some(msg)
                 }
                 _ => None,
             };
             if let Some(why) = lost {
-                console.say(&format!("wisptree: {why}; stopping"));
+                if never_connected.is_none() {
+                    // (Never connecting is returned as the run's error, printed once by main.)
+                    console.say(&format!("wisptree: {why}; stopping"));
+                }
                 summary.viewer_lost = true;
                 stop.stop();
             }
@@ -755,13 +779,19 @@ fn simulate(
         .map_err(|_| anyhow::anyhow!("the simulation thread panicked"))?;
     // The logger drains the queue and flushes; a viewer that stopped reading could keep it
     // waiting, so do not wait forever.
-    let logger_result = match logger_done_rx.recv_timeout(LOGGER_FINISH_TIMEOUT) {
+    // With the viewer gone there is nothing left to hand over: do not wait long.
+    let finish_timeout = if summary.viewer_lost {
+        LOST_VIEWER_FINISH_TIMEOUT
+    } else {
+        LOGGER_FINISH_TIMEOUT
+    };
+    let logger_result = match logger_done_rx.recv_timeout(finish_timeout) {
         Ok(()) => logger_handle
             .join()
             .map_err(|_| anyhow::anyhow!("the logging thread panicked"))?,
         Err(_) => Err(anyhow::anyhow!(
             "the logging thread did not finish within {} s; the recording may be incomplete",
-            LOGGER_FINISH_TIMEOUT.as_secs()
+            finish_timeout.as_secs()
         )),
     };
     if let Some(b) = &console.bar {
@@ -775,11 +805,13 @@ fn simulate(
     summary.merges = sim.merges;
     summary.restarts += sim.restarts;
     summary.interrupted = asked_to_stop && frames_total.is_none_or(|n| sim.frames < n);
+    if let Some(msg) = never_connected {
+        // Nothing was shown anywhere: an error, not a normal end.
+        anyhow::bail!(msg);
+    }
     if let Err(e) = logger_result {
-        if summary.viewer_lost {
-            // Expected: the viewer is gone, and the message was already printed.
-            console.say(&format!("(logging ended: {e:#})"));
-        } else {
+        if !summary.viewer_lost {
+            // (With the viewer gone, a failed final flush is expected and already explained.)
             return Err(e);
         }
     }

@@ -498,3 +498,53 @@ fn the_binary_exits_2_naming_a_missing_style_or_a_bad_motion() {
         assert!(err.contains(says), "{bad}: {err}");
     }
 }
+
+#[test]
+fn a_watched_geometry_edit_restarts_on_the_new_model() {
+    let dir = tempfile::tempdir().unwrap();
+    let style = write_style(dir.path(), "0.2");
+    let out = dir.path().join("geometry.rrd");
+    let stop = StopSignal::new();
+    let editor = {
+        let style = style.clone();
+        let out = out.clone();
+        let stop = stop.clone();
+        std::thread::spawn(move || {
+            assert!(wait_for(Duration::from_secs(20), || out.exists()));
+            std::thread::sleep(Duration::from_millis(300));
+            // Fewer cross-sections per wisp: a new model, not a parameter.
+            let text = tiny_style("0.2").replace("cross_sections: 8", "cross_sections: 5");
+            std::fs::write(&style, text).unwrap();
+            std::thread::sleep(Duration::from_millis(700));
+            stop.stop();
+        })
+    };
+    let summary = run::run_with(args(&style, &out, 1.0e5, true), stop).expect("run");
+    editor.join().unwrap();
+    assert_eq!(summary.restarts, 1, "{summary:?}");
+    assert_eq!(summary.reloads, 0, "{summary:?}");
+    let chunks = decode_file(&out);
+    let log = texts(&chunks, paths::LOG).join("\n");
+    assert!(log.contains("restarting"), "{log}");
+    // The strands drawn have K points smoothed: fewer cross-sections, shorter polylines.
+    let strips = LineStrips3D::descriptor_strips().component;
+    let strands: rerun::EntityPath = paths::STRANDS.into();
+    let mut lengths = Vec::new();
+    for c in chunks.iter().filter(|c| *c.entity_path() == strands) {
+        for item in c.iter_component::<rerun::components::LineStrip3D>(strips) {
+            lengths.push(item.as_slice()[0].0.len());
+        }
+    }
+    let (first, last) = (lengths[0], *lengths.last().unwrap());
+    assert!(last < first, "strand points {first} → {last}");
+    // Frames keep counting across the restart, one row each.
+    let node_rows = rows(
+        &chunks,
+        paths::NODES,
+        Points3D::descriptor_positions().component,
+    );
+    assert_eq!(
+        node_rows.iter().map(|r| r.0).collect::<Vec<_>>(),
+        (0..summary.frames_logged as i64).collect::<Vec<_>>()
+    );
+}
