@@ -33,16 +33,34 @@ fn main() -> anyhow::Result<()> {
         sim.step(&mut r);
         ms += r.counters.times.total().as_secs_f64() * 1e3;
         for e in &r.events {
+            if std::env::var_os("WT_EVENTS").is_some() && sim.time() > 3.0 {
+                println!(
+                    "{:?} t {:.2} l{} g{} i{} ar {:.3} rel {:.3}",
+                    e.kind, e.time, e.level, e.gc, e.cross_section, e.accel_radius, e.rel_velocity
+                );
+            }
             match e.kind {
                 EventKind::Split => splits += 1,
                 EventKind::Merge => merges += 1,
             }
         }
         if step % 25 == 0 {
+            let head = sim
+                .pose()
+                .transform_point(&Point3::from(model.scalp_center))
+                .coords;
+            let reach = sim
+                .slots
+                .pos
+                .iter()
+                .map(|x| (x - head).norm())
+                .fold(0.0, f64::max);
+            print!("reach {reach:.3}  ");
             println!(
-                "t {:5.2}  active {:?}  splits {splits:5} merges {merges:5}  ke {:.4} J  pairs {}/{}  body {}  {:.3} ms/step",
+                "t {:5.2}  active {:?}  splits {splits:5} merges {merges:5}  refused {:?}  ke {:.4} J  pairs {}/{}  body {}  {:.3} ms/step",
                 sim.time(),
                 r.counters.active_per_level,
+                sim.merge_refused(),
                 r.counters.kinetic_energy,
                 r.counters.pairs_in_contact,
                 r.counters.pairs_tested,

@@ -51,6 +51,9 @@ pub struct Forest {
 #[derive(Debug, Default, Clone)]
 pub struct AdaptScratch {
     sub_pos: Vec<Vector3<f64>>,
+    /// Merge candidates of the last `adapt` refused by condition (1) radius, (2) relative
+    /// velocity, (3) would split at once — for diagnostics.
+    pub merge_refused: [u32; 3],
 }
 
 /// The smallest rotation taking direction `from` to direction `to` (both non-zero).
@@ -348,6 +351,9 @@ impl Forest {
     }
 }
 
+/// Adaptation steps a node stays as it is after it appeared by a split or merge.
+pub const SETTLE_STEPS: u64 = 5;
+
 /// Splits (tip to root) and merges (root to tip) the forest once. The forest state must be
 /// current for the active nodes. Returns whether the active set changed.
 pub fn adapt(
@@ -365,6 +371,7 @@ pub fn adapt(
     }
     forest.adapt_step += 1;
     let now = forest.adapt_step;
+    scratch.merge_refused = [0; 3];
     let mut changed = false;
 
     // Splitting (§3.1). Cross-sections are visited root first, so when node i is examined its
@@ -374,7 +381,12 @@ pub fn adapt(
         for l in 0..nl - 1 {
             for g in 0..m.levels[l].gc_count() {
                 let j = g * k + i;
-                if !forest.active[l][j] || forest.state[l].changed_at[j] == now {
+                // A node that just appeared (split or merge) first settles for a few steps:
+                // the change itself jolts it (its links snap to their rest lengths), and that
+                // jolt must not split it straight back. Condition (3) of merging is the paper's
+                // guard against the same flip-flop; this is ours for its aftermath.
+                let since = forest.state[l].changed_at[j];
+                if !forest.active[l][j] || (since != 0 && now - since < SETTLE_STEPS) {
                     continue;
                 }
                 // (2) every AWT child has already split: the child at i + 1 is finer.
@@ -484,6 +496,7 @@ fn merge_test(
     // (1) every merging node lies within the super-node's radius of their centre of mass.
     let r_s = m.levels[l].radius[g * k + i];
     if scratch.sub_pos.iter().any(|x| (x - com).norm() > r_s) {
+        scratch.merge_refused[0] += 1;
         return None;
     }
     // (2) relative velocities under the threshold (largest pairwise difference).
@@ -497,12 +510,21 @@ fn merge_test(
         }
     }
     if rel >= p.merge_velocity {
+        if std::env::var_os("WT_DEBUG").is_some() {
+            let v: Vec<String> = subs
+                .clone()
+                .map(|s| format!("{:.3}", sl.vel[s as usize * k + i].norm()))
+                .collect();
+            eprintln!("vel refuse l{l} g{g} i{i} rel {rel:.3} speeds {v:?}");
+        }
+        scratch.merge_refused[1] += 1;
         return None;
     }
     // (3) the merged node would not split at once: |a_S| r_S ≤ threshold, r_S refitted.
     let r_fit = refit_radius(m, forest, l, g, i, &com);
     let ar = acc.norm() * r_fit;
     if ar > p.split_threshold {
+        scratch.merge_refused[2] += 1;
         return None;
     }
     Some((com, rel, ar))

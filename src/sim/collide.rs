@@ -530,7 +530,16 @@ fn interact(
             let mid = (xpa + xca - xpb - xcb) * 0.5;
             degenerate_normal(&d1, &d2, &mid)
         };
-        repulsion = n * (p.repulsion * m * (r - d));
+        // Only while the two approach: a penalty that also pushed separating wisps would, with
+        // the skipping of still pairs (§4.1), chatter forever on resting hair and pump energy
+        // into it. The response stays soft (§4.2) and never accelerates a separation.
+        // It is also capped at the impulse that stops the approach within the step, so like
+        // friction it can bring the normal relative velocity to zero but never reverse it.
+        let approach = -(v1 - v2).dot(&n);
+        if approach > 0.0 {
+            let push = (p.repulsion * m * (r - d)).min(m * approach / p.dt.max(1e-12));
+            repulsion = n * push;
+        }
     }
 
     Some(Contact {

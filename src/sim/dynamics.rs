@@ -221,8 +221,8 @@ fn implicit_springs(stiffness: f64, damping: f64, dt: f64, s: &mut Slots, sc: &m
 }
 
 /// Rigid links (Van Overveld): `iterations` mass-weighted sweeps, then a root-to-tip pass that
-/// sets every link to its rest length exactly; velocities become the position change / dt.
-pub fn project_rigid_links(s: &mut Slots, iterations: u32, dt: f64) {
+/// sets every link to its rest length exactly.
+pub fn project_rigid_links(s: &mut Slots, iterations: u32) {
     for _ in 0..iterations {
         for c in 0..s.len() {
             let pa = s.parent[c];
@@ -258,9 +258,16 @@ pub fn project_rigid_links(s: &mut Slots, iterations: u32, dt: f64) {
             s.pos[c] = s.pos[pa] + d * (s.rest_len[c] / len);
         }
     }
+}
+
+/// Rigid links: velocities from the step's whole position change (integration, links, body),
+/// except for nodes in contact with the body, which keep the obstacle's velocity (static
+/// friction, §4.3). Computing them after every correction keeps the corrections from feeding
+/// energy back into the hair.
+pub fn rigid_velocities(s: &mut Slots, dt: f64) {
     let inv_dt = 1.0 / dt;
     for c in 0..s.len() {
-        if s.parent[c] != NO_SLOT {
+        if s.parent[c] != NO_SLOT && !s.contact[c] {
             s.vel[c] = (s.pos[c] - s.prev_pos[c]) * inv_dt;
         }
     }
@@ -321,6 +328,7 @@ pub fn restore_lengths_outside(s: &mut Slots, spheres: &[BodySphere], pose: &Pos
         s.pos[c] = x;
         if touched {
             s.vel[c] = pose.velocity_at(&Point3::from(x));
+            s.contact[c] = true;
         }
     }
 }
@@ -371,7 +379,14 @@ fn nearest_on_circle(
 /// moving average with weight `smoothing` on the newest value (1 = no smoothing).
 pub fn update_accelerations(s: &mut Slots, dt: f64, smoothing: f64) {
     for c in 0..s.len() {
-        let a = (s.vel[c] - s.vel_start[c]) / dt;
+        // A node held by the body moves with it (static friction, §4.3): the velocity jump of
+        // the contact is the body's doing, not hair motion, and would make resting hair that
+        // touches and leaves a shoulder every other step split forever.
+        let a = if s.contact[c] {
+            Vector3::zeros()
+        } else {
+            (s.vel[c] - s.vel_start[c]) / dt
+        };
         s.acc[c] = s.acc[c] * (1.0 - smoothing) + a * smoothing;
     }
 }

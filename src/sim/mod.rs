@@ -56,6 +56,9 @@ pub struct Slots {
     /// Rest vector from the parent to this node in the rest pose (the styled direction).
     pub rest_vec: Vec<Vector3<f64>>,
     pub rest_len: Vec<f64>,
+    /// Scratch: positions before the body stage, and which nodes the body touched this step.
+    pub pre_body: Vec<Vector3<f64>>,
+    pub contact: Vec<bool>,
     /// Segments (non-root slots) for the collider: parent slot, child slot, radius, mass.
     pub seg_parent: Vec<u32>,
     pub seg_child: Vec<u32>,
@@ -86,6 +89,8 @@ impl Slots {
         self.radius.clear();
         self.rest_vec.clear();
         self.rest_len.clear();
+        self.pre_body.clear();
+        self.contact.clear();
         self.seg_parent.clear();
         self.seg_child.clear();
         self.seg_radius.clear();
@@ -115,6 +120,7 @@ pub struct Simulation {
     /// While settling, the pose stays at t = 0 and the tree does not adapt.
     settling: bool,
     pose: Pose,
+    prev_pose: Pose,
     collider: collide::HairCollider,
     spheres: Vec<collide::BodySphere>,
     dyn_scratch: dynamics::Scratch,
@@ -153,6 +159,7 @@ impl Simulation {
             steps: 0,
             settling: false,
             pose,
+            prev_pose: pose,
             collider: collide::HairCollider::new(),
             spheres: Vec::new(),
             dyn_scratch: dynamics::Scratch::default(),
@@ -265,6 +272,8 @@ impl Simulation {
                     s.radius.push(st.radius[j]);
                     s.rest_vec.push(Vector3::zeros());
                     s.rest_len.push(0.0);
+                    s.pre_body.push(Vector3::zeros());
+                    s.contact.push(false);
                 }
             }
         }
@@ -317,6 +326,7 @@ impl Simulation {
 
         // Pose: roots and body spheres move with the character.
         let clock = Instant::now();
+        self.prev_pose = self.pose;
         self.pose = self.motion.pose(if self.settling { 0.0 } else { t_new });
         self.spheres.clear();
         for sp in &self.model.body {
@@ -375,7 +385,7 @@ impl Simulation {
 
         let clock = Instant::now();
         if let Link::Rigid { iterations } = self.link {
-            dynamics::project_rigid_links(&mut self.slots, iterations, dt);
+            dynamics::project_rigid_links(&mut self.slots, iterations);
         }
         times.links = clock.elapsed();
 
@@ -383,6 +393,7 @@ impl Simulation {
         let pose = &self.pose;
         let body_contacts = {
             let s = &mut self.slots;
+            s.pre_body.copy_from_slice(&s.pos);
             let view = collide::SegmentsView {
                 parent: &s.seg_parent,
                 child: &s.seg_child,
@@ -393,8 +404,29 @@ impl Simulation {
                 pose.velocity_at(&Point3::from(*x))
             })
         };
+        {
+            // Static friction (§4.3): a node the body pushed keeps its place on the body, i.e.
+            // its start-of-step position carried by the body's motion, when that is outside
+            // every sphere; otherwise it would slide down the sphere a little every step.
+            let carry = self.pose.iso * self.prev_pose.iso.inverse();
+            let s = &mut self.slots;
+            for c in 0..s.len() {
+                s.contact[c] = s.pos[c] != s.pre_body[c];
+                if s.contact[c] {
+                    let held = (carry * Point3::from(s.prev_pos[c])).coords;
+                    if self
+                        .spheres
+                        .iter()
+                        .all(|sp| (held - sp.center).norm() >= sp.radius)
+                    {
+                        s.pos[c] = held;
+                    }
+                }
+            }
+        }
         if matches!(self.link, Link::Rigid { .. }) {
             dynamics::restore_lengths_outside(&mut self.slots, &self.spheres, pose);
+            dynamics::rigid_velocities(&mut self.slots, dt);
         }
         dynamics::update_accelerations(&mut self.slots, dt, self.params.accel_smoothing);
         times.obstacles = clock.elapsed();
@@ -537,6 +569,12 @@ impl Simulation {
     /// Mass of the active nodes (root nodes included): always the hair's total mass.
     pub fn active_mass(&self) -> f64 {
         self.slots.mass.iter().sum()
+    }
+
+    /// Merge candidates refused in the last step by condition (1) radius, (2) relative
+    /// velocity, (3) would split at once.
+    pub fn merge_refused(&self) -> [u32; 3] {
+        self.adapt_scratch.merge_refused
     }
 
     /// Number of active nodes.

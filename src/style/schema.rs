@@ -305,7 +305,7 @@ pub enum Link {
     /// Viscous springs for curly hair, integrated implicitly so curls can stretch.
     Spring {
         /// Stiffness per kilogram of hair the link carries (from its child node to the tip),
-        /// s⁻²: under gravity g a link stretches by about g / stiffness metres. Default 1500.
+        /// s⁻²: under gravity g a link stretches by about g / stiffness metres. Default 4000.
         #[serde(default = "default_spring_stiffness")]
         stiffness: f64,
         /// Damping rate of the relative velocity along the link, per kilogram carried, s⁻¹.
@@ -327,7 +327,7 @@ fn default_link_iterations() -> u32 {
     8
 }
 fn default_spring_stiffness() -> f64 {
-    1500.0
+    4000.0
 }
 fn default_spring_damping() -> f64 {
     20.0
@@ -345,7 +345,7 @@ pub struct SimParams {
     #[serde(default = "d_split_threshold")]
     pub split_threshold: f64,
     /// Merge velocity threshold: largest relative speed of merging nodes, m/s. *Tunable.*
-    /// Default 0.05.
+    /// Default 0.1.
     #[serde(default = "d_merge_velocity")]
     pub merge_velocity: f64,
     /// Friction α of hair–hair interaction (k_f = α·m_child), s⁻¹; α·dt must be < 1.
@@ -369,8 +369,9 @@ pub struct SimParams {
     /// Gravity, m/s². *Tunable.* Default (0, -9.81, 0).
     #[serde(default = "d_gravity")]
     pub gravity: Vec3,
-    /// Air drag: rate at which a node's velocity relative to the wind is damped, s⁻¹.
-    /// *Tunable.* Default 0.8.
+    /// Air drag: rate at which a node's velocity relative to the wind is damped, s⁻¹ (it also
+    /// stands for the hair's internal damping).
+    /// *Tunable.* Default 2.
     #[serde(default = "d_air_drag")]
     pub air_drag: f64,
     /// The wind field. *Tunable.* Default: still air.
@@ -425,7 +426,7 @@ fn d_split_threshold() -> f64 {
     0.3
 }
 fn d_merge_velocity() -> f64 {
-    0.05
+    0.1
 }
 fn d_friction() -> f64 {
     30.0
@@ -446,7 +447,7 @@ fn d_gravity() -> Vec3 {
     [0.0, -9.81, 0.0]
 }
 fn d_air_drag() -> f64 {
-    0.8
+    2.0
 }
 fn d_bending() -> f64 {
     60.0
