@@ -133,7 +133,7 @@ fn stages(c: &mut Criterion) {
             g.bench_function(format!("{style}/links"), |b| {
                 b.iter_batched_ref(
                     || slots.clone(),
-                    |s| dynamics::project_rigid_links(s, iterations, dt),
+                    |s| dynamics::project_rigid_links(s, iterations),
                     BatchSize::LargeInput,
                 )
             });

@@ -5,7 +5,8 @@
 //! Tree, with the same dynamics and collision code. Only `Simulation::step` is timed (wall
 //! clock around each call); loading the style, building the model and the settling that
 //! `Simulation::from_style` does before t = 0 are excluded. Then the whole recording pipeline
-//! is timed on Long curly, end to end (see [`time_pipeline`]).
+//! is timed on Long curly: `wisptree run --save` itself, end to end ([`time_run_pipeline`]),
+//! and the same work done sequentially, by part ([`time_pipeline`]).
 //!
 //! Nothing here asserts a time: numbers are printed (and written as JSON) for people to read.
 
@@ -37,10 +38,10 @@ pub const PAPER_TABLE: [(&str, usize, usize, f64, f64, f64); 4] = [
 pub const MOTION: &str = "lean";
 /// Integration steps per displayed frame in the pipeline (paper: 4 steps of 10 ms, 25 fps).
 pub const STEPS_PER_FRAME: usize = 4;
-/// Strands drawn by the timed pipeline when `run` has no default of its own to borrow.
-pub const PIPELINE_STRANDS: usize = 500;
-/// Catmull-Rom points per span of a drawn strand in the timed pipeline.
-pub const PIPELINE_SUBDIVISIONS: usize = 4;
+/// Strands drawn by the timed pipeline: `wisptree run`'s default.
+pub const PIPELINE_STRANDS: usize = crate::run::DEFAULT_STRANDS;
+/// Catmull-Rom points per span of a drawn strand: `wisptree run`'s.
+pub const PIPELINE_SUBDIVISIONS: usize = crate::run::STRAND_SUBDIVISIONS;
 
 /// `wisptree bench` arguments.
 #[derive(Debug, Clone, clap::Args)]
@@ -64,13 +65,14 @@ pub struct BenchArgs {
     /// Directory holding the style files (default `styles`, else the crate's own `styles/`).
     #[arg(long, value_name = "DIR")]
     pub styles: Option<PathBuf>,
-    /// Skip the pipeline timing (simulation + strands + logging to a .rrd on Long curly).
+    /// Skip the pipeline timings (simulation + strands + logging to a .rrd on Long curly).
     #[arg(long)]
     pub no_pipeline: bool,
-    /// Strands drawn in the timed pipeline.
+    /// Strands drawn in the timed pipelines (default: `wisptree run`'s).
     #[arg(long, value_name = "N", default_value_t = PIPELINE_STRANDS)]
     pub strands: usize,
-    /// Keep the pipeline's recording at FILE instead of a deleted temporary file.
+    /// Keep the recording of the `wisptree run` pipeline at FILE instead of a deleted
+    /// temporary file.
     #[arg(long, value_name = "FILE")]
     pub rrd: Option<PathBuf>,
 }
@@ -209,7 +211,7 @@ pub struct ModelResult {
     pub awt: RunStats,
 }
 
-/// The whole-pipeline timing on one model.
+/// The sequential pipeline timing on one model, by part.
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct PipelineResult {
     pub model: String,
@@ -228,6 +230,20 @@ pub struct PipelineResult {
     pub rrd_bytes: u64,
 }
 
+/// `wisptree run --save FILE` itself (simulation and logging threads), timed end to end.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct RunPipelineResult {
+    pub model: String,
+    pub sim_seconds: f64,
+    pub frames: u64,
+    pub strands: usize,
+    /// From the call to `run::run_with` (style loading and settling included) to its return
+    /// with the file flushed, s.
+    pub wall_s: f64,
+    pub wall_s_per_sim_s: f64,
+    pub rrd_bytes: u64,
+}
+
 /// Everything `wisptree bench` measured.
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct BenchReport {
@@ -237,8 +253,11 @@ pub struct BenchReport {
     pub sim_seconds: f64,
     pub motion: String,
     pub models: Vec<ModelResult>,
+    /// `wisptree run` on Long curly to a `.rrd`: wall seconds per simulated second.
     pub pipeline_wall_s_per_sim_s: Option<f64>,
-    pub pipeline: Option<PipelineResult>,
+    pub pipeline: Option<RunPipelineResult>,
+    /// The same work done sequentially in one thread, timed by part.
+    pub pipeline_sequential: Option<PipelineResult>,
 }
 
 /// CPU model name and logical core count, from `/proc/cpuinfo` where there is one.
@@ -453,6 +472,44 @@ pub fn time_pipeline(
     })
 }
 
+/// Times `wisptree run --style PATH --motion lean --seconds S --strands N --no-watch --save RRD`
+/// through [`crate::run::run_with`], end to end, as a user would wait for it.
+pub fn time_run_pipeline(
+    path: &Path,
+    seconds: f64,
+    strands: usize,
+    rrd: &Path,
+) -> anyhow::Result<RunPipelineResult> {
+    let args = crate::run::RunArgs {
+        style: path.to_path_buf(),
+        motion: MOTION.to_string(),
+        seconds: Some(seconds),
+        strands,
+        single_level: false,
+        watch: false,
+        no_watch: true,
+        sink: crate::run::SinkArgs {
+            save: Some(rrd.to_path_buf()),
+            ..Default::default()
+        },
+    };
+    let t0 = Instant::now();
+    let summary = crate::run::run_with(args, crate::run::StopSignal::new())?;
+    let wall = t0.elapsed().as_secs_f64();
+    if summary.interrupted {
+        anyhow::bail!("the timed `wisptree run` stopped early");
+    }
+    Ok(RunPipelineResult {
+        model: model_name(&path.to_string_lossy()),
+        sim_seconds: summary.sim_time,
+        frames: summary.frames_logged,
+        strands,
+        wall_s: wall,
+        wall_s_per_sim_s: wall / summary.sim_time.max(1e-9),
+        rrd_bytes: std::fs::metadata(rrd).map(|m| m.len()).unwrap_or(0),
+    })
+}
+
 /// Prints the §5.2 table, the paper's, and the per-stage breakdowns.
 pub fn print_report(r: &BenchReport) {
     println!(
@@ -521,7 +578,22 @@ pub fn print_report(r: &BenchReport) {
     if let Some(p) = &r.pipeline {
         println!();
         println!(
-            "pipeline ({}, sequential in one thread, {} frames of {} steps, {} strands, .rrd {:.1} MB):",
+            "pipeline: `wisptree run --style {}.ron --motion lean --seconds {} --strands {} --save FILE`",
+            p.model, r.sim_seconds, p.strands
+        );
+        println!(
+            "  {:.2} s wall for {:.2} s simulated ({} frames, .rrd {:.1} MB) = {:.3} wall s per simulated s",
+            p.wall_s,
+            p.sim_seconds,
+            p.frames,
+            p.rrd_bytes as f64 / 1e6,
+            p.wall_s_per_sim_s
+        );
+    }
+    if let Some(p) = &r.pipeline_sequential {
+        println!();
+        println!(
+            "the same work sequentially in one thread ({}, {} frames of {} steps, {} strands, .rrd {:.1} MB):",
             p.model,
             p.frames,
             STEPS_PER_FRAME,
@@ -533,7 +605,7 @@ pub fn print_report(r: &BenchReport) {
             p.wall_s, p.sim_seconds, p.wall_s_per_sim_s
         );
         println!(
-            "  setup+settle {:.2} s, steps {:.2} s, frames {:.2} s, logging {:.2} s, flush {:.2} s",
+            "  load+settle {:.2} s, steps {:.2} s, frames {:.2} s, logging {:.2} s, flush {:.2} s",
             p.setup_s, p.step_s, p.frame_build_s, p.log_s, p.flush_s
         );
     }
@@ -578,7 +650,7 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
 
     // Progress in steps, assuming the paper's 10 ms step (only the bar's length depends on it).
     let per_run = steps_for(seconds, 0.01) as u64;
-    let total = per_run * 2 * paths.len() as u64 + if pipeline { per_run } else { 0 };
+    let total = per_run * 2 * paths.len() as u64 + if pipeline { 2 * per_run } else { 0 };
     let progress = ProgressBar::new(total);
     progress.set_style(
         ProgressStyle::with_template(
@@ -592,21 +664,28 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
     for (name, p) in &paths {
         models.push(bench_model(p, name, seconds, &progress)?);
     }
-    let pipeline = if pipeline {
+    let (pipeline, pipeline_sequential) = if pipeline {
+        let temp = |what: &str| {
+            std::env::temp_dir().join(format!("wisptree-bench-{}-{what}.rrd", std::process::id()))
+        };
+        let seq_rrd = temp("sequential");
+        let seq = time_pipeline(&pipeline_path, seconds, args.strands, &seq_rrd, &progress);
+        let _ = std::fs::remove_file(&seq_rrd);
         let (rrd, temporary) = match &args.rrd {
             Some(p) => (p.clone(), false),
-            None => (
-                std::env::temp_dir().join(format!("wisptree-bench-{}.rrd", std::process::id())),
-                true,
-            ),
+            None => (temp("run"), true),
         };
-        let r = time_pipeline(&pipeline_path, seconds, args.strands, &rrd, &progress);
+        progress.set_message("pipeline: wisptree run");
+        // `run` draws its own progress bar.
+        let real =
+            progress.suspend(|| time_run_pipeline(&pipeline_path, seconds, args.strands, &rrd));
+        progress.inc(per_run);
         if temporary {
             let _ = std::fs::remove_file(&rrd);
         }
-        Some(r?)
+        (Some(real?), Some(seq?))
     } else {
-        None
+        (None, None)
     };
     progress.finish_and_clear();
 
@@ -618,6 +697,7 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
         models,
         pipeline_wall_s_per_sim_s: pipeline.as_ref().map(|p| p.wall_s_per_sim_s),
         pipeline,
+        pipeline_sequential,
     };
     print_report(&report);
     if let Some(path) = &args.json {
