@@ -81,6 +81,8 @@ pub struct HairModel {
     /// Mass of one strand, kg.
     pub strand_mass: f64,
     pub total_mass: f64,
+    /// Length of the longest strand as given (before resampling, curls included), m.
+    pub longest_strand: f64,
     pub link: Link,
     /// Scalp ellipsoid (centre, radii) and body spheres in the rest pose.
     pub scalp_center: Vector3<f64>,
@@ -298,6 +300,16 @@ impl HairModel {
             strands,
             strand_mass,
             total_mass: s.sim.total_mass,
+            longest_strand: hair
+                .strands
+                .iter()
+                .map(|st| {
+                    st.points
+                        .windows(2)
+                        .map(|w| (Vector3::from(w[1]) - Vector3::from(w[0])).norm())
+                        .sum::<f64>()
+                })
+                .fold(0.0, f64::max),
             link: s.link.clone(),
             scalp_center: Vector3::from(s.head.scalp.center),
             scalp_radii: Vector3::from(s.head.scalp.radii),
@@ -341,18 +353,9 @@ impl HairModel {
             .fold((f64::INFINITY, 0.0), |(a, b), r| (a.min(r), b.max(r)))
     }
 
-    /// Length of the longest strand at rest, m.
+    /// Length of the longest strand as given (curls included), m.
     pub fn max_strand_length(&self) -> f64 {
-        let k = self.k;
-        (0..self.strands.len())
-            .map(|s| {
-                (1..k)
-                    .map(|i| {
-                        (self.strands.rest[s * k + i] - self.strands.rest[s * k + i - 1]).norm()
-                    })
-                    .sum::<f64>()
-            })
-            .fold(0.0, f64::max)
+        self.longest_strand
     }
 }
 

@@ -21,6 +21,7 @@ fn params(split: f64, merge_v: f64) -> SimParams {
     SimParams {
         split_threshold: split,
         merge_velocity: merge_v,
+        merge_radius_factor: 1.0,
         ..SimParams::default()
     }
 }

@@ -494,7 +494,7 @@ fn merge_test(
     com /= mass;
     acc /= mass;
     // (1) every merging node lies within the super-node's radius of their centre of mass.
-    let r_s = m.levels[l].radius[g * k + i];
+    let r_s = m.levels[l].radius[g * k + i] * p.merge_radius_factor;
     if scratch.sub_pos.iter().any(|x| (x - com).norm() > r_s) {
         scratch.merge_refused[0] += 1;
         return None;
@@ -510,13 +510,6 @@ fn merge_test(
         }
     }
     if rel >= p.merge_velocity {
-        if std::env::var_os("WT_DEBUG").is_some() {
-            let v: Vec<String> = subs
-                .clone()
-                .map(|s| format!("{:.3}", sl.vel[s as usize * k + i].norm()))
-                .collect();
-            eprintln!("vel refuse l{l} g{g} i{i} rel {rel:.3} speeds {v:?}");
-        }
         scratch.merge_refused[1] += 1;
         return None;
     }

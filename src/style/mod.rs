@@ -270,6 +270,7 @@ pub fn validate(style: &Style) -> Result<(), Invalid> {
     positive(s.total_mass, "sim.total_mass")?;
     non_negative(s.split_threshold, "sim.split_threshold")?;
     non_negative(s.merge_velocity, "sim.merge_velocity")?;
+    positive(s.merge_radius_factor, "sim.merge_radius_factor")?;
     non_negative(s.friction, "sim.friction")?;
     non_negative(s.repulsion, "sim.repulsion")?;
     check(
