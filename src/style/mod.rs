@@ -177,9 +177,15 @@ fn line_of_field(text: &str, field: &str) -> Option<usize> {
         return None;
     }
     text.lines().enumerate().find_map(|(n, line)| {
-        let t = line.trim_start();
-        let after = t.strip_prefix(leaf)?;
-        after.trim_start().starts_with(':').then_some(n + 1)
+        // `leaf` as a whole word followed by `:` anywhere on the line (fields are often inline).
+        let found = line.match_indices(leaf).any(|(at, _)| {
+            let before_ok = line[..at]
+                .chars()
+                .next_back()
+                .is_none_or(|c| !(c.is_alphanumeric() || c == '_'));
+            before_ok && line[at + leaf.len()..].trim_start().starts_with(':')
+        });
+        found.then_some(n + 1)
     })
 }
 

@@ -1,0 +1,238 @@
+//! `wisptree inspect` end to end: its output, and every kind of bad input exiting with code 2
+//! and a message that names the file, the position and the field.
+
+mod common;
+
+use std::path::Path;
+use std::process::Command;
+
+use common::*;
+
+fn wisptree(args: &[&str]) -> (i32, String, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_wisptree"))
+        .args(args)
+        .output()
+        .expect("the binary runs");
+    (
+        out.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+/// A valid small generated style, as text, to break in various ways.
+fn good_style() -> String {
+    r#"Style(
+    name: "small",
+    hair: Generated((
+        density: 5,
+        wisps: [(
+            name: "left",
+            region: (azimuth: (60, 120), elevation: (10, 50)),
+            key_strand: [(0.05, 0.01, 0.0), (0.15, 0.0, 0.0)],
+        )],
+        copies: [(source: "left", name: "right", mirror: true)],
+    )),
+    hierarchy: (levels: 2, cross_sections: 6, branching: [3]),
+    sim: (total_mass: 0.5),
+)
+"#
+    .to_string()
+}
+
+fn write(dir: &Path, name: &str, text: &str) -> String {
+    let p = dir.join(name);
+    std::fs::write(&p, text).unwrap();
+    p.to_string_lossy().into_owned()
+}
+
+#[test]
+fn inspect_prints_levels_and_json() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = write(dir.path(), "good.ron", &good_style());
+    let (code, out, err) = wisptree(&["inspect", &p]);
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        out.contains("strands") && out.contains("link         rigid"),
+        "{out}"
+    );
+    let (code, out, err) = wisptree(&["inspect", &p, "--json"]);
+    assert_eq!(code, 0, "{err}");
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert_eq!(v["levels"], 2);
+    assert_eq!(v["cross_sections"], 6);
+    assert_eq!(v["link"], "rigid");
+    let nodes = v["nodes_per_level"].as_array().unwrap();
+    let gcs = v["gcs_per_level"].as_array().unwrap();
+    assert_eq!(nodes.len(), 2);
+    // Two wisps (left and its mirror), each split in 3.
+    assert_eq!(gcs[0], 2);
+    assert_eq!(gcs[1], 6);
+    assert_eq!(nodes[1].as_u64().unwrap(), 6 * 6);
+    assert!((v["total_mass_kg"].as_f64().unwrap() - 0.5).abs() < 1e-12);
+    assert!(v["strands"].as_u64().unwrap() >= 6);
+}
+
+#[test]
+fn inspect_json_on_the_paper_styles() {
+    for (name, levels) in [("short.ron", 2), ("long_curly.ron", 3)] {
+        let p = root().join("styles").join(name);
+        let (code, out, err) = wisptree(&["inspect", p.to_str().unwrap(), "--json"]);
+        assert_eq!(code, 0, "{err}");
+        let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+        assert_eq!(v["levels"], levels);
+    }
+}
+
+/// Each case: (file name, text or None for a missing file, what the message must contain).
+#[test]
+fn bad_styles_exit_2_with_file_position_and_field() {
+    let dir = tempfile::tempdir().unwrap();
+    let good = good_style();
+    let cases: Vec<(&str, Option<String>, Vec<&str>)> = vec![
+        ("missing.ron", None, vec!["missing.ron", "cannot read"]),
+        ("empty.ron", Some(String::new()), vec!["empty.ron", "empty"]),
+        (
+            "notron.ron",
+            Some("this is not RON at all {".into()),
+            vec!["notron.ron:1:"],
+        ),
+        (
+            "syntax.ron",
+            Some(good.replace("name: \"left\",", "name: \"left\" ,,")),
+            vec!["syntax.ron:6:"],
+        ),
+        (
+            "unknown.ron",
+            Some(good.replace(
+                "sim: (total_mass: 0.5)",
+                "sim: (total_mass: 0.5, splt_threshold: 1)",
+            )),
+            vec!["unknown.ron:13:", "splt_threshold"],
+        ),
+        (
+            "wrongtype.ron",
+            Some(good.replace("total_mass: 0.5", "total_mass: \"heavy\"")),
+            vec!["wrongtype.ron:13:"],
+        ),
+        (
+            "nolevels.ron",
+            Some(good.replace(
+                "levels: 2, cross_sections: 6, branching: [3]",
+                "levels: 0, branching: []",
+            )),
+            vec!["nolevels.ron", "hierarchy.levels"],
+        ),
+        (
+            "k1.ron",
+            Some(good.replace("cross_sections: 6", "cross_sections: 1")),
+            vec!["k1.ron:12", "hierarchy.cross_sections"],
+        ),
+        (
+            "radius.ron",
+            Some(good.replace(
+                "    name: \"small\",",
+                "    name: \"small\",\n    head: (body: [(center: (0, 1.6, 0), radius: -0.1)]),",
+            )),
+            vec!["radius.ron", "head.body[0].radius"],
+        ),
+        (
+            "mass.ron",
+            Some(good.replace("total_mass: 0.5", "total_mass: -1")),
+            vec!["mass.ron:13", "sim.total_mass"],
+        ),
+        (
+            "alpha.ron",
+            Some(good.replace(
+                "sim: (total_mass: 0.5)",
+                "sim: (total_mass: 0.5, friction: 150, dt: 0.01)",
+            )),
+            vec!["alpha.ron:13", "sim.friction", "α·dt"],
+        ),
+        (
+            "mirror.ron",
+            Some(good.replace("source: \"left\"", "source: \"lefty\"")),
+            vec!["mirror.ron:10", "hair.copies[0].source", "lefty"],
+        ),
+    ];
+    for (name, text, needles) in cases {
+        let path = match &text {
+            Some(t) => write(dir.path(), name, t),
+            None => dir.path().join(name).to_string_lossy().into_owned(),
+        };
+        let (code, _, err) = wisptree(&["inspect", &path]);
+        assert_eq!(code, 2, "{name}: exit {code}, stderr: {err}");
+        assert!(
+            !err.contains("panicked") && !err.contains("backtrace"),
+            "{name}: {err}"
+        );
+        assert!(err.lines().count() <= 3, "{name}: message too long: {err}");
+        for n in needles {
+            assert!(err.contains(n), "{name}: `{n}` not in: {err}");
+        }
+    }
+}
+
+#[test]
+fn bad_tfx_files_exit_2() {
+    let dir = tempfile::tempdir().unwrap();
+    let style = |file: &str| {
+        format!("Style(hair: TressFx((files: [\"{file}\"])), hierarchy: (levels: 2, cross_sections: 4, branching: [2], top_level: 2))")
+    };
+    // A valid v4 file to corrupt.
+    let strands: Vec<Vec<[f32; 3]>> = (0..8)
+        .map(|s| (0..4).map(|v| [s as f32, 100.0 - v as f32, 0.0]).collect())
+        .collect();
+    let bytes = wisptree::style::tfx::write_tfx_v4(&strands);
+    std::fs::write(dir.path().join("ok.tfx"), &bytes).unwrap();
+    std::fs::write(dir.path().join("short.tfx"), &bytes[..bytes.len() - 10]).unwrap();
+    let mut bad_header = bytes.clone();
+    bad_header[0..4].copy_from_slice(&7.5f32.to_le_bytes());
+    std::fs::write(dir.path().join("header.tfx"), &bad_header).unwrap();
+    let mut sizes = bytes.clone();
+    sizes[4..8].copy_from_slice(&1000u32.to_le_bytes());
+    std::fs::write(dir.path().join("sizes.tfx"), &sizes).unwrap();
+
+    let p = write(dir.path(), "ok.ron", &style("ok.tfx"));
+    let (code, out, err) = wisptree(&["inspect", &p, "--json"]);
+    assert_eq!(code, 0, "{err}");
+    assert!(out.contains("\"strands\": 8"), "{out}");
+
+    for (file, needle) in [
+        ("nothere.tfx", "nothere.tfx"),
+        ("short.tfx", "truncated"),
+        ("header.tfx", "version"),
+        ("sizes.tfx", "1000"),
+    ] {
+        let p = write(dir.path(), &format!("{file}.ron"), &style(file));
+        let (code, _, err) = wisptree(&["inspect", &p]);
+        assert_eq!(code, 2, "{file}: {err}");
+        assert!(err.contains(file) && err.contains(needle), "{file}: {err}");
+        assert!(!err.contains("panicked"), "{err}");
+    }
+}
+
+#[test]
+fn ponytail_style_loads_when_the_data_is_there() {
+    if shared().is_none() {
+        eprintln!("skipping: ../shared is absent");
+        return;
+    }
+    let p = root().join("styles/ponytail.ron");
+    let (code, out, err) = wisptree(&["inspect", p.to_str().unwrap(), "--json"]);
+    assert_eq!(code, 0, "{err}");
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert_eq!(v["strands"], 4714);
+    assert_eq!(v["levels"], 3);
+    // The head spheres come from the project file, in metres.
+    let (loaded, _) = shipped("ponytail.ron");
+    assert_eq!(loaded.body.len(), 3);
+    assert!((loaded.body[0].radius - 0.265).abs() < 1e-9);
+}
+
+#[test]
+fn a_wrong_flag_exits_2() {
+    let (code, _, err) = wisptree(&["inspect", "--jsn", "x.ron"]);
+    assert_eq!(code, 2);
+    assert!(err.contains("--jsn"));
+}
