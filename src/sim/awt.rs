@@ -101,6 +101,8 @@ impl Forest {
         let nl = m.level_count();
         let on = if single_level { nl - 1 } else { 0 };
         let mut f = Forest::default();
+        // Scratch sized for the worst case up front (no allocation inside a step).
+        f.children.reserve(m.finest().gc_count());
         for (l, lv) in m.levels.iter().enumerate() {
             let n = lv.gc_count() * k;
             f.active.push(vec![l == on; n]);
@@ -484,6 +486,7 @@ fn merge_test(
     let mut com = Vector3::zeros();
     let mut acc = Vector3::zeros();
     scratch.sub_pos.clear();
+    scratch.sub_pos.reserve(subs.len());
     for s in subs.clone() {
         let sj = s as usize * k + i;
         mass += lm.mass[sj];

@@ -67,6 +67,31 @@ pub struct Slots {
 }
 
 impl Slots {
+    fn reserve(&mut self, n: usize) {
+        let n = n.saturating_sub(self.level.len());
+        self.level.reserve(n);
+        self.node.reserve(n);
+        self.cs.reserve(n);
+        self.parent.reserve(n);
+        self.pos.reserve(n);
+        self.prev_pos.reserve(n);
+        self.vel.reserve(n);
+        self.vel_start.reserve(n);
+        self.acc.reserve(n);
+        self.force.reserve(n);
+        self.mass.reserve(n);
+        self.mass_below.reserve(n);
+        self.radius.reserve(n);
+        self.rest_vec.reserve(n);
+        self.rest_len.reserve(n);
+        self.pre_body.reserve(n);
+        self.contact.reserve(n);
+        self.seg_parent.reserve(n);
+        self.seg_child.reserve(n);
+        self.seg_radius.reserve(n);
+        self.seg_mass.reserve(n);
+    }
+
     pub fn len(&self) -> usize {
         self.level.len()
     }
@@ -239,6 +264,9 @@ impl Simulation {
         let f = &mut self.forest;
         let s = &mut self.slots;
         s.clear();
+        // At most one active node per finest cross-section: reserve that once, so the active
+        // set can grow to anything without reallocating inside a step.
+        s.reserve(m.nodes_on_level(m.level_count() - 1));
         for i in 0..k {
             for (l, lv) in m.levels.iter().enumerate() {
                 for g in 0..lv.gc_count() {
