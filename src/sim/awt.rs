@@ -63,7 +63,7 @@ pub fn min_rotation(from: &Vector3<f64>, to: &Vector3<f64>) -> Matrix3<f64> {
     let c = a.dot(&b);
     let v = a.cross(&b);
     let s2 = v.norm_squared();
-    if !(s2 > 1e-24) || !c.is_finite() {
+    if s2.is_nan() || s2 <= 1e-24 || !c.is_finite() {
         if c >= 0.0 || !c.is_finite() {
             return Matrix3::identity();
         }
