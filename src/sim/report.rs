@@ -76,7 +76,8 @@ pub struct Counters {
     pub active_per_level: Vec<u32>,
     /// Active segments (active non-root nodes).
     pub segments: u32,
-    /// Segment pairs that shared a voxel and were tested.
+    /// Segment pairs that reached the cylinder test (sharing a voxel, not adjacent, moving
+    /// relative to each other, boxes overlapping).
     pub pairs_tested: u32,
     /// Tested pairs found in contact.
     pub pairs_in_contact: u32,
