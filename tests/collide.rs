@@ -3,7 +3,7 @@
 use nalgebra::Vector3;
 use wisptree::sim::collide::{
     accumulate_brute_force, closest_segment_params, resolve_body, BodySphere, ContactParams,
-    HairCollider, PairStats, SegmentsView,
+    HairCollider, PairStats, SegmentsView, CELLS_PER_SEGMENT, MAX_CELLS,
 };
 
 type V = Vector3<f64>;
@@ -355,7 +355,59 @@ fn grid_matches_brute_force_and_tests_each_pair_once() {
         assert_eq!(st.tested, sb.tested, "scene {scene}");
         let n = view.len() as u32;
         assert_eq!(sb.candidates, n * (n - 1) / 2);
-        // The broad phase must actually prune (otherwise it is just the brute force)...
+
+        // Independent counts over the cell ranges of the grid the collider built: every pair
+        // sharing a voxel is visited exactly once (candidates), and the tested pairs are those
+        // that share one, are not adjacent, move relative to each other and whose inflated
+        // boxes overlap.
+        let grid = col.grid();
+        let ncells = grid.dims.iter().map(|&d| d as usize).product::<usize>();
+        assert!(ncells <= MAX_CELLS.min((CELLS_PER_SEGMENT * view.len()).max(64)));
+        let ranges: Vec<_> = (0..view.len())
+            .map(|i| grid.cell_range(&view, &s.pos, i))
+            .collect();
+        let boxes: Vec<(V, V)> = (0..view.len())
+            .map(|i| {
+                let (a, b) = (
+                    s.pos[view.parent[i] as usize],
+                    s.pos[view.child[i] as usize],
+                );
+                (a.inf(&b), a.sup(&b))
+            })
+            .collect();
+        let (mut sharing, mut expected_tested) = (0, 0);
+        for a in 0..view.len() {
+            for b in a + 1..view.len() {
+                let (la, ha) = ranges[a];
+                let (lb, hb) = ranges[b];
+                if (0..3).any(|k| la[k].max(lb[k]) > ha[k].min(hb[k])) {
+                    continue;
+                }
+                sharing += 1;
+                let nodes = [view.parent[a], view.child[a]];
+                if nodes.contains(&view.parent[b]) || nodes.contains(&view.child[b]) {
+                    continue;
+                }
+                let r = view.radius[a] + view.radius[b];
+                let ((bla, bha), (blb, bhb)) = (boxes[a], boxes[b]);
+                if (0..3).any(|k| bla[k] - bhb[k] > r || blb[k] - bha[k] > r) {
+                    continue;
+                }
+                let vs = |i: usize| {
+                    [
+                        s.vel[view.parent[i] as usize],
+                        s.vel[view.child[i] as usize],
+                    ]
+                };
+                let moving = vs(a)
+                    .iter()
+                    .any(|x| vs(b).iter().any(|y| (x - y).norm() >= p.epsilon));
+                expected_tested += moving as u32;
+            }
+        }
+        assert_eq!(st.candidates, sharing, "scene {scene}");
+        assert_eq!(st.tested, expected_tested, "scene {scene}");
+        // The grid must actually prune (otherwise it is just the brute force).
         if scene > 4 {
             assert!(
                 st.candidates < sb.candidates / 2,
@@ -363,27 +415,8 @@ fn grid_matches_brute_force_and_tests_each_pair_once() {
                 st.candidates,
                 sb.candidates
             );
+            assert!(ncells > 8, "scene {scene}: {:?}", grid.dims);
         }
-        // ...and visit every pair whose inflated boxes overlap (an independent count).
-        let boxes: Vec<(V, V)> = (0..view.len())
-            .map(|i| {
-                let (a, b) = (
-                    s.pos[view.parent[i] as usize],
-                    s.pos[view.child[i] as usize],
-                );
-                let r = V::repeat(view.radius[i]);
-                (a.inf(&b) - r, a.sup(&b) + r)
-            })
-            .collect();
-        let mut overlapping = 0;
-        for a in 0..boxes.len() {
-            for b in a + 1..boxes.len() {
-                let (la, ha) = boxes[a];
-                let (lb, hb) = boxes[b];
-                overlapping += (0..3).all(|k| la[k] <= hb[k] && lb[k] <= ha[k]) as u32;
-            }
-        }
-        assert!(st.tested <= overlapping && overlapping <= st.candidates);
     }
     assert!(
         total_contacts > 50,
@@ -431,9 +464,18 @@ fn far_away_node_keeps_grid_bounded() {
     );
     let mut col = HairCollider::new();
     let (f, st) = run(&mut col, &s, &p);
+    let g = col.grid();
+    let ncells = g.dims.iter().map(|&d| d as usize).product::<usize>();
+    assert!(
+        ncells <= (CELLS_PER_SEGMENT * s.parent.len()).max(64),
+        "{g:?}"
+    );
+    // The grid still covers the far node: the cell side grew instead of the cell count.
+    assert!(g.dims[0] as f64 * g.cell_size >= 1000.0, "{g:?}");
     let mut fb = vec![V::zeros(); s.pos.len()];
     let sb = accumulate_brute_force(&s.view(), &s.pos, &s.vel, &p, &mut fb);
     assert_eq!(st.in_contact, sb.in_contact);
+    assert_eq!(st.tested, sb.tested);
     let scale = max_norm(&fb);
     assert!(f
         .iter()

@@ -30,23 +30,33 @@
 //! * **Degenerate normals.** When the axes intersect (`d ≈ 0`) the repulsion normal is the cross
 //!   product of the axes, oriented from the second segment's midpoint towards the first's.
 //!   A zero-length segment has no orientation and gets friction only.
-//! * **Broad phase: sort and sweep, not a grid.** The coarse wisps are fat (radius up to
-//!   ~7 cm) and a third of the active pairs are really in contact, so a voxel grid with cells the
-//!   size of the inflated boxes had only a few dozen cells and visited more pairs than the brute
-//!   force. The segments are instead sorted by the min of their inflated boxes along the axis where
-//!   boxes are thinnest relative to the scene's spread, and each is paired with the following ones
-//!   until their min passes its max: every pair overlapping on that axis is visited exactly once,
-//!   no memory grows with the scene's extent (a node flung far away costs nothing), and ties in the
-//!   sort are broken by segment index, so the forces depend only on the input.
+//! * **Broad phase: a uniform voxel grid** (AWT §4.1), rebuilt every step: a dense cell array
+//!   over the bounding box of the segments' radius-inflated boxes, filled by a counting sort into
+//!   reused buffers. A pair is tested only in the cell at the min corner of the overlap of its two
+//!   cell ranges, so each pair sharing a voxel is tested once without a pair set or hashing (the
+//!   rule is one AND of two 3-bit masks stored in the cell lists, see [`HairCollider`]). Cell lists
+//!   are filled in segment order, so the forces depend only on the input.
+//! * **Cell size: twice the mean segment length.** The coarse wisps are fat (radius up to
+//!   ~7 cm, larger than a segment) and most pairs that share a voxel really are close, so the
+//!   closest-point tests dominate and the grid only has to keep its own costs below them. Smaller
+//!   cells put a fat wisp in dozens of cells and the pair visits repeated in every shared cell
+//!   grow faster than the pairs pruned (one mean length: 350 k cell-pair visits per step on
+//!   `long` for 25 k candidates); larger cells, like the old side of the inflated boxes, let more
+//!   distant pairs through (four lengths: 42 k candidates for 17 k tested). Measured on `long` and
+//!   `long_curly` under `lean`, cells of 2 mean lengths were among the fastest (2–4 lengths within
+//!   the noise) with the fewest candidates of those: ~1.9 (resp. 1.7) per pair tested. The dense
+//!   array is capped at [`CELLS_PER_SEGMENT`] cells per segment (clearing and scanning it cost per
+//!   cell) and at [`MAX_CELLS`] in all (the cell side grows instead), which bounds time and memory
+//!   when a node flies away.
 //! * **Filters are exact.** Box overlap (boxes inflated by `r1 + r2`), adjacency and the
 //!   relative-motion test are symmetric and computed from per-segment data gathered once per step;
-//!   the closest points and the response are computed with the lower segment index first, as in
-//!   [`accumulate_brute_force`], so both find the same contacts with bit-identical pair forces
-//!   (only the order in which they are summed differs).
-//! * **One thread.** Splitting the sweep into chunks run by rayon (own contact list per chunk,
-//!   applied in chunk order) was measured at 15–30 % faster on 2 busy cores, but every call from
+//!   the closest points and the response are computed with the lower segment index first (cell
+//!   lists are ascending), as in [`accumulate_brute_force`], so both find the same contacts with
+//!   bit-identical pair forces (only the order in which they are summed differs).
+//! * **One thread.** Splitting the pair search into chunks run by rayon (own contact list per
+//!   chunk, applied in chunk order) was measured at 15–30 % faster on 2 busy cores, but every call from
 //!   outside the pool pushes a job on rayon's injector, which allocates a 1.5 kB block every 63
-//!   jobs: that breaks the no-allocation-once-warm guarantee (tests/alloc.rs), so the sweep runs on
+//!   jobs: that breaks the no-allocation-once-warm guarantee (tests/alloc.rs), so the grid runs on
 //!   the calling thread.
 
 use nalgebra::Vector3;
@@ -146,11 +156,26 @@ impl ContactParams {
     }
 }
 
+/// Upper bound on the number of cells of the dense voxel grid (4 MiB of `u32` offsets), whatever
+/// the number of segments: bounds memory when a node flies away.
+pub const MAX_CELLS: usize = 1 << 20;
+
+/// Cells allowed per segment: the dense cell array is cleared, counted and scanned every step,
+/// so beyond a few cells per segment the scan of empty cells costs more than it prunes.
+pub const CELLS_PER_SEGMENT: usize = 8;
+
+/// Cell side in mean segment lengths (see the module docs).
+const CELL_IN_SEGMENT_LENGTHS: f64 = 2.0;
+
+/// The mask bits of an item of a cell list (see [`HairCollider`]): bit `k` set when the segment's
+/// cell range starts below this cell along axis `k`.
+const MASK_SHIFT: u32 = 29;
+
 /// Counters of one [`HairCollider::accumulate`] call.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct PairStats {
-    /// Pairs whose radius-inflated boxes overlap along the sweep axis: the pairs the broad phase
-    /// visits (all `n·(n − 1)/2` pairs in [`accumulate_brute_force`]).
+    /// Pairs the broad phase visits, each once: the pairs sharing at least one voxel (all
+    /// `n·(n − 1)/2` pairs in [`accumulate_brute_force`]).
     pub candidates: u32,
     /// Pairs that reached the closest-point routine: not adjacent, moving relative to each other,
     /// boxes inflated by `r1 + r2` overlapping on every axis. Each such pair counts once.
@@ -159,25 +184,64 @@ pub struct PairStats {
     pub in_contact: u32,
 }
 
-/// Reused buffers of the broad phase (sort and sweep) and of the response. Allocation only while
-/// warming up.
+/// The voxel grid of the last [`HairCollider::accumulate`] call.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct GridInfo {
+    /// World position of the min corner of cell (0, 0, 0), m.
+    pub origin: Vector3<f64>,
+    /// Side of the cubic cells, m.
+    pub cell_size: f64,
+    /// Number of cells along x, y, z.
+    pub dims: [u32; 3],
+}
+
+impl GridInfo {
+    /// Cell coordinates of a point, clamped to the grid.
+    pub fn cell_of(&self, p: &Vector3<f64>) -> [u32; 3] {
+        let mut c = [0u32; 3];
+        for k in 0..3 {
+            let f = ((p[k] - self.origin[k]) / self.cell_size).floor();
+            // `as` saturates (NaN → 0), the min keeps the cell inside the grid.
+            c[k] = (f.max(0.0) as u32).min(self.dims[k].saturating_sub(1));
+        }
+        c
+    }
+
+    /// Inclusive cell range `(lo, hi)` of segment `i`: the cells its box, inflated by its radius
+    /// (plus a relative 1e-12, see [`broad_box`]), touches.
+    pub fn cell_range(
+        &self,
+        segs: &SegmentsView,
+        pos: &[Vector3<f64>],
+        i: usize,
+    ) -> ([u32; 3], [u32; 3]) {
+        let (lo, hi) = broad_box(segs, pos, i);
+        (self.cell_of(&lo), self.cell_of(&hi))
+    }
+}
+
+/// Reused buffers of the broad phase (uniform voxel grid) and of the response. Allocation only
+/// while warming up.
 ///
-/// The segments are sorted by the min of their radius-inflated boxes along one axis (the one where
-/// boxes are thinnest relative to the spread of the scene); each segment is then paired with the
-/// following ones until their min passes its max, so every pair whose boxes overlap on that axis is
-/// visited exactly once, and the other two axes are checked from a compact per-position array
-/// before the exact tests.
+/// The grid is dense over the segments' bounding box and filled by a counting sort. Each item of
+/// a cell list is a segment index with, in its top 3 bits, a mask saying along which axes the
+/// segment's cell range starts BELOW this cell. A pair belongs to the min corner of the overlap of
+/// its two cell ranges, i.e. to the one shared cell where, on every axis, at least one of the two
+/// ranges starts: there the two masks have no bit in common. So the "tested once" rule is one AND
+/// on data already in the cell list, without a pair set or a lookup of the ranges.
 #[derive(Default)]
 pub struct HairCollider {
-    /// `(min along the sweep axis, segment)` in sweep order.
-    order: Vec<(f64, u32)>,
-    /// Per sweep position: max of the inflated box along the sweep axis.
-    reach: Vec<f64>,
-    /// Per sweep position: the segment's data.
+    /// Per segment: its data for the pair tests.
     pre: Vec<SegPre>,
+    /// Per segment: min and max cell coordinates of its box.
+    lo: Vec<[u32; 3]>,
+    hi: Vec<[u32; 3]>,
+    /// Dense cell offsets into `items` (counting sort), `ncells + 1` entries.
+    cell_start: Vec<u32>,
+    /// Segment index | mask << [`MASK_SHIFT`], grouped by cell, ascending index within a cell.
+    items: Vec<u32>,
+    grid: GridInfo,
     contacts: Vec<Contact>,
-    /// Sweep axis of the last call (0 = x, 1 = y, 2 = z).
-    axis: usize,
     load: Vec<f64>,
     node_mass: Vec<f64>,
 }
@@ -187,16 +251,16 @@ impl HairCollider {
         Self::default()
     }
 
-    /// The sweep axis chosen by the last call to [`Self::accumulate`] (0 = x, 1 = y, 2 = z).
-    pub fn sweep_axis(&self) -> usize {
-        self.axis
+    /// The grid built by the last call to [`Self::accumulate`].
+    pub fn grid(&self) -> GridInfo {
+        self.grid
     }
 
     /// Bytes reserved by the reused buffers (stays constant once warmed up on a scene size).
     pub fn capacity_bytes(&self) -> usize {
-        self.order.capacity() * std::mem::size_of::<(f64, u32)>()
-            + self.reach.capacity() * 8
-            + self.pre.capacity() * std::mem::size_of::<SegPre>()
+        self.pre.capacity() * std::mem::size_of::<SegPre>()
+            + (self.lo.capacity() + self.hi.capacity()) * std::mem::size_of::<[u32; 3]>()
+            + (self.cell_start.capacity() + self.items.capacity()) * 4
             + self.contacts.capacity() * std::mem::size_of::<Contact>()
             + (self.load.capacity() + self.node_mass.capacity()) * 8
     }
@@ -216,34 +280,42 @@ impl HairCollider {
             return stats;
         }
         assert!(
-            n < u32::MAX as usize,
-            "too many segments for u32 indices: {n}"
+            n < 1 << MASK_SHIFT,
+            "too many segments for the cell lists: {n}"
         );
-        self.sort_boxes(segs, pos);
-        self.gather(segs, pos, vel);
-        let order = &self.order[..];
-        let reach = &self.reach[..];
+        self.pre.clear();
+        self.pre
+            .extend((0..n).map(|i| SegPre::new(segs, pos, vel, i)));
+        self.build_grid(segs, pos);
         let pre = &self.pre[..];
+        let items = &self.items[..];
+        let starts = &self.cell_start[..];
         let eps2 = p.epsilon * p.epsilon;
         let contacts = &mut self.contacts;
         contacts.clear();
-        for i in 0..n {
-            let (ri, si) = (reach[i], &pre[i]);
-            for j in i + 1..n {
-                // Sorted by min: no later segment can overlap `i` along the sweep axis.
-                if order[j].0 > ri {
-                    break;
-                }
-                stats.candidates += 1;
-                let sj = &pre[j];
-                if !pair_filter(si, sj, eps2) {
-                    continue;
-                }
-                stats.tested += 1;
-                // `contact` wants the lower segment index first (same rounding as the reference).
-                let (a, b) = if si.seg < sj.seg { (si, sj) } else { (sj, si) };
-                if let Some(c) = contact(a, b, p) {
-                    contacts.push(c);
+        const INDEX: u32 = (1 << MASK_SHIFT) - 1;
+        for c in 0..starts.len() - 1 {
+            let cell = &items[starts[c] as usize..starts[c + 1] as usize];
+            if cell.len() < 2 {
+                continue;
+            }
+            for (k, &ia) in cell.iter().enumerate() {
+                let sa = &pre[(ia & INDEX) as usize];
+                for &ib in &cell[k + 1..] {
+                    // Only in the min corner of the overlap of the two cell ranges (see above).
+                    if (ia & ib) >> MASK_SHIFT != 0 {
+                        continue;
+                    }
+                    stats.candidates += 1;
+                    let sb = &pre[(ib & INDEX) as usize];
+                    if !pair_filter(sa, sb, eps2) {
+                        continue;
+                    }
+                    stats.tested += 1;
+                    // Cell lists are ascending: `sa` has the lower index, as `contact` wants.
+                    if let Some(c) = contact(sa, sb, p) {
+                        contacts.push(c);
+                    }
                 }
             }
         }
@@ -259,47 +331,94 @@ impl HairCollider {
         stats
     }
 
-    /// Inflated boxes, the sweep axis, and the segments sorted along it.
-    fn sort_boxes(&mut self, segs: &SegmentsView, pos: &[Vector3<f64>]) {
+    /// The grid's geometry, then a counting sort of the segments into its dense cell array.
+    fn build_grid(&mut self, segs: &SegmentsView, pos: &[Vector3<f64>]) {
         let n = segs.len();
         let mut bmin = Vector3::repeat(f64::INFINITY);
         let mut bmax = Vector3::repeat(f64::NEG_INFINITY);
-        let mut width = Vector3::zeros();
-        for i in 0..n {
-            let (lo, hi) = inflated_box(segs, pos, i);
+        let mut len_sum = 0.0;
+        for (i, s) in self.pre.iter().enumerate() {
+            let (lo, hi) = broad_box(segs, pos, i);
             bmin = bmin.inf(&lo);
             bmax = bmax.sup(&hi);
-            width += hi - lo;
+            len_sum += s.len2.sqrt();
         }
-        // The expected number of overlaps along an axis grows with (mean width) / (spread).
-        let mut axis = 1;
-        let mut best = f64::INFINITY;
-        for k in [1, 0, 2] {
-            let ratio = width[k] / (bmax[k] - bmin[k]);
-            if ratio < best {
-                best = ratio;
-                axis = k;
+        let extent = bmax - bmin;
+        let mut grid = GridInfo {
+            origin: bmin,
+            cell_size: 1.0,
+            dims: [1, 1, 1],
+        };
+        let max_cells = (CELLS_PER_SEGMENT * n).clamp(64, MAX_CELLS) as f64;
+        if extent.iter().all(|e| e.is_finite()) {
+            // A floor keeps degenerate scenes (all points equal) finite.
+            let mut h = (CELL_IN_SEGMENT_LENGTHS * len_sum / n as f64)
+                .max(extent.max() * 1e-6)
+                .max(1e-9);
+            for _ in 0..64 {
+                let dims = extent.map(|e| (e / h).floor() + 1.0);
+                let cells = dims.x * dims.y * dims.z;
+                if cells <= max_cells {
+                    grid.dims = [dims.x as u32, dims.y as u32, dims.z as u32];
+                    grid.cell_size = h;
+                    break;
+                }
+                // Grow the cells so the product fits; the margin absorbs the `+ 1` per axis.
+                h *= (cells / max_cells).cbrt() * 1.01;
             }
         }
-        self.axis = axis;
-        self.order.clear();
-        for i in 0..n {
-            let (lo, _) = sweep_box(segs, pos, i);
-            self.order.push((lo[axis], i as u32));
-        }
-        // Ties broken by segment index: the order, hence the forces, depend only on the input.
-        self.order
-            .sort_unstable_by(|x, y| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1)));
-    }
+        // Non-finite extents (a bug upstream, e.g. a NaN position) fall back to one cell: slow
+        // but bounded, and never a hang.
+        self.grid = grid;
+        let ncells = grid.dims.iter().map(|&d| d as usize).product::<usize>();
 
-    /// Per sweep position: the max along the sweep axis and the segment's data.
-    fn gather(&mut self, segs: &SegmentsView, pos: &[Vector3<f64>], vel: &[Vector3<f64>]) {
-        self.reach.clear();
-        self.pre.clear();
-        for &(_, i) in &self.order {
-            let (_, hi) = sweep_box(segs, pos, i as usize);
-            self.reach.push(hi[self.axis]);
-            self.pre.push(SegPre::new(segs, pos, vel, i as usize));
+        self.lo.clear();
+        self.hi.clear();
+        self.cell_start.clear();
+        self.cell_start.resize(ncells + 1, 0);
+        let [dx, dy, _] = grid.dims.map(|d| d as usize);
+        let mut total = 0usize;
+        for i in 0..n {
+            let (lo, hi) = grid.cell_range(segs, pos, i);
+            self.lo.push(lo);
+            self.hi.push(hi);
+            for z in lo[2]..=hi[2] {
+                for y in lo[1]..=hi[1] {
+                    let row = (z as usize * dy + y as usize) * dx;
+                    for x in lo[0]..=hi[0] {
+                        self.cell_start[row + x as usize] += 1;
+                    }
+                }
+            }
+            total += ((hi[0] - lo[0] + 1) * (hi[1] - lo[1] + 1) * (hi[2] - lo[2] + 1)) as usize;
+        }
+        assert!(total < u32::MAX as usize, "too many cell entries: {total}");
+        // Inclusive prefix sums: cell_start[c] = end of cell c.
+        let mut acc = 0u32;
+        for s in &mut self.cell_start[..ncells] {
+            acc += *s;
+            *s = acc;
+        }
+        self.cell_start[ncells] = acc;
+        self.items.clear();
+        self.items.resize(total, 0);
+        // Filling from the last segment backwards while decrementing the ends leaves each cell
+        // list ascending and cell_start[c] at the start of cell c.
+        for i in (0..n).rev() {
+            let (lo, hi) = (self.lo[i], self.hi[i]);
+            for z in lo[2]..=hi[2] {
+                let mz = ((z > lo[2]) as u32) << 2;
+                for y in lo[1]..=hi[1] {
+                    let myz = mz | ((y > lo[1]) as u32) << 1;
+                    let row = (z as usize * dy + y as usize) * dx;
+                    for x in lo[0]..=hi[0] {
+                        let mask = myz | (x > lo[0]) as u32;
+                        let s = &mut self.cell_start[row + x as usize];
+                        *s -= 1;
+                        self.items[*s as usize] = i as u32 | mask << MASK_SHIFT;
+                    }
+                }
+            }
         }
     }
 }
@@ -389,23 +508,11 @@ pub fn apply_contacts(
     }
 }
 
-/// Axis-aligned box of segment `i` inflated by its radius.
+/// The broad phase's box of segment `i`: the box of its nodes inflated by its radius, grown by a
+/// relative 1e-12 so that rounding can never put two segments that [`pair_filter`] keeps into
+/// disjoint cell ranges (cell coordinates are monotonic in the position).
 #[inline]
-fn inflated_box(
-    segs: &SegmentsView,
-    pos: &[Vector3<f64>],
-    i: usize,
-) -> (Vector3<f64>, Vector3<f64>) {
-    let a = pos[segs.parent[i] as usize];
-    let b = pos[segs.child[i] as usize];
-    let r = Vector3::repeat(segs.radius[i]);
-    (a.inf(&b) - r, a.sup(&b) + r)
-}
-
-/// The broad phase's box of segment `i`: [`inflated_box`] grown by a relative 1e-12 so that its
-/// rounding can never reject a pair the exact test in [`interact`] keeps.
-#[inline]
-fn sweep_box(segs: &SegmentsView, pos: &[Vector3<f64>], i: usize) -> (Vector3<f64>, Vector3<f64>) {
+fn broad_box(segs: &SegmentsView, pos: &[Vector3<f64>], i: usize) -> (Vector3<f64>, Vector3<f64>) {
     let a = pos[segs.parent[i] as usize];
     let b = pos[segs.child[i] as usize];
     let (lo, hi) = (a.inf(&b), a.sup(&b));
@@ -462,7 +569,6 @@ impl SegPre {
 
 /// Whether a pair reaches the closest-point routine: boxes inflated by `r1 + r2` overlapping on
 /// every axis (cylinders closer than `r1 + r2` must), not adjacent, moving relative to each other.
-/// Symmetric in its two arguments (bit for bit), so the sweep may call it in either order.
 #[inline(always)]
 fn pair_filter(a: &SegPre, b: &SegPre, eps2: f64) -> bool {
     let r = a.radius + b.radius;
@@ -491,7 +597,7 @@ fn pair_filter(a: &SegPre, b: &SegPre, eps2: f64) -> bool {
 }
 
 /// The contact of a pair that passed [`pair_filter`], if the cylinders intersect. `a` must be the
-/// segment with the lower index, so that the sweep and the reference compute bit-identical pair
+/// segment with the lower index, so that the grid and the reference compute bit-identical pair
 /// forces.
 #[inline]
 fn contact(a: &SegPre, b: &SegPre, p: &ContactParams) -> Option<Contact> {
