@@ -129,7 +129,7 @@ fn no_node_ends_a_step_inside_a_body_sphere() {
         let mut r = StepReport::default();
         for step in 0..300 {
             sim.step(&mut r);
-            let pose = sim.pose().clone();
+            let pose = *sim.pose();
             for sp in &sim.model.body {
                 let c = pose
                     .transform_point(&Point3::from(Vector3::from(sp.center)))
