@@ -118,13 +118,20 @@ pub fn level_color(level: u16, levels: u16) -> Rgba32 {
     Rgba32::from_rgb(r, g, b)
 }
 
-const HAIR_COLOR: (u8, u8, u8) = (160, 105, 60);
+const HAIR_COLOR: (u8, u8, u8) = (235, 190, 120);
+/// Opacity of the active nodes and segments (0–255).
+const NODE_ALPHA: u8 = 255;
+const SEGMENT_ALPHA: u8 = 90;
+/// Nodes are drawn as spheres of this fraction of their radius: at full size the coarse nodes
+/// (up to 15 cm) cover the strands and all finer levels; the segment capsules around them show
+/// the full radius.
+const NODE_DRAW_SCALE: f32 = 0.35;
 const SPLIT_COLOR: (u8, u8, u8) = (255, 90, 20);
 const MERGE_COLOR: (u8, u8, u8) = (40, 200, 230);
 const BODY_COLOR: (u8, u8, u8, u8) = (170, 170, 180, 110);
 const SCALP_COLOR: (u8, u8, u8) = (225, 190, 160);
 /// Strand width on screen: thin and independent of zoom, so 10,000 strands stay readable.
-const STRAND_RADIUS_UI: f32 = 0.6;
+const STRAND_RADIUS_UI: f32 = 1.0;
 /// Event markers: big enough to find in a frame.
 const EVENT_RADIUS_UI: f32 = 6.0;
 
@@ -199,6 +206,9 @@ pub struct Logger {
     /// Whether the last frame logged markers of that kind (then an eventless frame clears them).
     splits_shown: bool,
     merges_shown: bool,
+    /// Per-instance translucent level colours, reused.
+    node_colors: Vec<Color>,
+    seg_colors: Vec<Color>,
 }
 
 impl Logger {
@@ -236,6 +246,8 @@ impl Logger {
             text: String::new(),
             splits_shown: false,
             merges_shown: false,
+            node_colors: Vec::new(),
+            seg_colors: Vec::new(),
         };
         logger.set_time(0, 0.0);
         logger.log_message(
@@ -274,15 +286,33 @@ impl Logger {
         let n = &frame.nodes;
         // Points3D with scene-unit radii render as shaded spheres and stay cheap for thousands
         // of nodes (Ellipsoids3D would tessellate a mesh per node).
+        // Translucent level colours (the class ids still label them): at their true radius the
+        // coarse nodes and cylinders would otherwise hide the strands and every finer level.
+        let tint = |level: u16, alpha: u8| {
+            let [r, g, b, _] = level_color(level, frame.levels).to_array();
+            Color::from_unmultiplied_rgba(r, g, b, alpha)
+        };
+        self.node_colors.clear();
+        self.node_colors
+            .extend(n.levels.iter().map(|&l| tint(l, NODE_ALPHA)));
         self.rec.log(
             self.paths.nodes.clone(),
             &Points3D::new(n.positions.iter().copied())
-                .with_radii(n.radii.iter().map(|&r| Radius::new_scene_units(r)))
-                .with_class_ids(n.levels.iter().copied()),
+                .with_radii(
+                    n.radii
+                        .iter()
+                        .map(|&r| Radius::new_scene_units(r * NODE_DRAW_SCALE)),
+                )
+                .with_class_ids(n.levels.iter().copied())
+                .with_colors(self.node_colors.iter().copied()),
         )?;
 
         let s = &frame.segments;
-        // Wireframe capsules: the cylinders of paper Fig. 4 without hiding the strands inside.
+        self.seg_colors.clear();
+        self.seg_colors
+            .extend(s.levels.iter().map(|&l| tint(l, SEGMENT_ALPHA)));
+        // Faint wireframe capsules: the cylinders of paper Fig. 4 at their true radius, without
+        // hiding the strands inside.
         self.rec.log(
             self.paths.segments.clone(),
             &Capsules3D::from_endpoints_and_radii(
@@ -291,6 +321,7 @@ impl Logger {
                 s.radii.iter().copied(),
             )
             .with_class_ids(s.levels.iter().copied())
+            .with_colors(self.seg_colors.iter().copied())
             .with_fill_mode(FillMode::MajorWireframe),
         )?;
 
