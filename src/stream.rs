@@ -25,15 +25,16 @@ use rerun::components::{FillMode, Name, Radius, TextLogLevel};
 use rerun::datatypes::{Rgba32, Uuid};
 use rerun::external::re_log_types::{BlueprintActivationCommand, LogMsg, RecordingId};
 use rerun::external::re_sdk_types::blueprint::archetypes::{
-    ContainerBlueprint, EyeControls3D, ViewBlueprint, ViewContents, ViewportBlueprint,
+    ContainerBlueprint, EyeControls3D, PanelBlueprint, TimePanelBlueprint, ViewBlueprint,
+    ViewContents, ViewportBlueprint,
 };
 use rerun::external::re_sdk_types::blueprint::components::{
-    AutoLayout, AutoViews, ColumnShare, ContainerKind, Eye3DKind, IncludedContent, QueryExpression,
-    RootContainer, RowShare, ViewClass,
+    AutoLayout, AutoViews, ColumnShare, ContainerKind, Eye3DKind, IncludedContent, PanelState,
+    QueryExpression, RootContainer, RowShare, ViewClass,
 };
 use rerun::{
     AnnotationContext, Capsules3D, Color, Ellipsoids3D, EntityPath, LineStrips3D, Points3D,
-    RecordingStream, RecordingStreamBuilder, Scalars, TextLog, ViewCoordinates,
+    RecordingStream, RecordingStreamBuilder, Scalars, SeriesLines, TextLog, ViewCoordinates,
 };
 
 use crate::frame::Frame;
@@ -118,14 +119,18 @@ pub fn level_color(level: u16, levels: u16) -> Rgba32 {
     Rgba32::from_rgb(r, g, b)
 }
 
-const HAIR_COLOR: (u8, u8, u8) = (235, 190, 120);
+const HAIR_COLOR: (u8, u8, u8) = (255, 205, 120);
 /// Opacity of the active nodes and segments (0–255).
 const NODE_ALPHA: u8 = 255;
-const SEGMENT_ALPHA: u8 = 90;
+/// Segment opacity of the coarsest and the finest level; levels in between are interpolated.
+/// Coarse capsules are large and overlap many times over (a 7 cm capsule per cross-section of
+/// every top-level wisp), so they need to be the most transparent.
+const SEGMENT_ALPHA_COARSE: f32 = 22.0;
+const SEGMENT_ALPHA_FINE: f32 = 30.0;
 /// Nodes are drawn as spheres of this fraction of their radius: at full size the coarse nodes
 /// (up to 15 cm) cover the strands and all finer levels; the segment capsules around them show
 /// the full radius.
-const NODE_DRAW_SCALE: f32 = 0.35;
+const NODE_DRAW_SCALE: f32 = 0.25;
 const SPLIT_COLOR: (u8, u8, u8) = (255, 90, 20);
 const MERGE_COLOR: (u8, u8, u8) = (40, 200, 230);
 const BODY_COLOR: (u8, u8, u8, u8) = (170, 170, 180, 110);
@@ -236,6 +241,7 @@ impl Logger {
         )
         .context("logging the annotation context")?;
         send_blueprint(&rec, style_name, head_center)?;
+        log_series_styles(&rec, levels)?;
 
         let mut logger = Logger {
             rec,
@@ -309,10 +315,19 @@ impl Logger {
 
         let s = &frame.segments;
         self.seg_colors.clear();
+        let seg_alpha = |level: u16| {
+            let t = if frame.levels <= 1 {
+                0.0
+            } else {
+                f32::from(level.min(frame.levels - 1)) / f32::from(frame.levels - 1)
+            };
+            (SEGMENT_ALPHA_COARSE + t * (SEGMENT_ALPHA_FINE - SEGMENT_ALPHA_COARSE)).round() as u8
+        };
         self.seg_colors
-            .extend(s.levels.iter().map(|&l| tint(l, SEGMENT_ALPHA)));
-        // Faint wireframe capsules: the cylinders of paper Fig. 4 at their true radius, without
-        // hiding the strands inside.
+            .extend(s.levels.iter().map(|&l| tint(l, seg_alpha(l))));
+        // The cylinders of paper Fig. 4 at their true radius as translucent solids: Capsules3D
+        // honours alpha only in `FillMode::Solid`, and wireframes of hundreds of overlapping
+        // 7 cm capsules made a dense cage over the strands (checked on rendered screenshots).
         self.rec.log(
             self.paths.segments.clone(),
             &Capsules3D::from_endpoints_and_radii(
@@ -322,7 +337,7 @@ impl Logger {
             )
             .with_class_ids(s.levels.iter().copied())
             .with_colors(self.seg_colors.iter().copied())
-            .with_fill_mode(FillMode::MajorWireframe),
+            .with_fill_mode(FillMode::Solid),
         )?;
 
         // Refill the reused polylines in place; only the count of strands may grow.
@@ -467,6 +482,46 @@ impl Logger {
     }
 }
 
+/// Fixed series colours and names, logged once (static): the active-node curves take their
+/// level's colour and the split/merge curves their marker's, so plot and 3D view read alike;
+/// the viewer's automatic colours would give level 0 and level 2 the same pink.
+fn log_series_styles(rec: &RecordingStream, levels: u16) -> anyhow::Result<()> {
+    let rgb = |(r, g, b): (u8, u8, u8)| Color::from_rgb(r, g, b);
+    for l in 0..levels {
+        rec.log_static(
+            paths::active_nodes_level(l as usize),
+            &SeriesLines::new()
+                .with_colors([level_color(l, levels)])
+                .with_names([format!("level {l}")]),
+        )?;
+    }
+    let fixed: [(&str, (u8, u8, u8), &str); 10] = [
+        (paths::STAT_SPLITS, SPLIT_COLOR, "splits"),
+        (paths::STAT_MERGES, MERGE_COLOR, "merges"),
+        (paths::PAIRS_TESTED, (150, 150, 255), "pairs tested"),
+        (paths::PAIRS_IN_CONTACT, (255, 120, 200), "pairs in contact"),
+        (paths::BODY_CONTACTS, (120, 230, 140), "body contacts"),
+        (paths::KINETIC_ENERGY, (255, 210, 80), "kinetic energy (J)"),
+        (
+            paths::SPLIT_THRESHOLD,
+            SPLIT_COLOR,
+            "split threshold (m²/s²)",
+        ),
+        (paths::MERGE_VELOCITY, MERGE_COLOR, "merge velocity (m/s)"),
+        (paths::STEP_MS, (200, 200, 210), "step (ms)"),
+        (paths::DROPPED_FRAMES, (255, 80, 80), "dropped frames"),
+    ];
+    for (path, color, name) in fixed {
+        rec.log_static(
+            path,
+            &SeriesLines::new()
+                .with_colors([rgb(color)])
+                .with_names([name]),
+        )?;
+    }
+    Ok(())
+}
+
 /// One line per event: what, where in the hierarchy, and the value that triggered it.
 fn describe_event(out: &mut String, e: &AdaptEvent) {
     let what = match e.kind {
@@ -507,29 +562,38 @@ struct ViewSpec {
 }
 
 const SPATIAL_CONTENTS: &[&str] = &["+ /hair/**", "+ /body/**", "+ /head/**", "+ /events/**"];
-const COUNT_CONTENTS: &[&str] = &[
+/// Time series are grouped by magnitude, so that no series flattens another: node counts
+/// (hundreds to thousands) with the adaptation events per frame, collision work (pairs tested
+/// run to 10⁵–10⁶) apart from them, the small real-valued quantities together, and the
+/// timing apart.
+const NODE_CONTENTS: &[&str] = &[
     "+ /stats/active_nodes/**",
     "+ /stats/splits",
     "+ /stats/merges",
+];
+const COLLISION_CONTENTS: &[&str] = &[
     "+ /stats/pairs_tested",
     "+ /stats/pairs_in_contact",
     "+ /stats/body_contacts",
-    "+ /stats/dropped_frames",
 ];
-const ENERGY_CONTENTS: &[&str] = &[
-    "+ /stats/kinetic_energy",
-    "+ /stats/step_ms",
-    "+ /params/**",
-];
+const ENERGY_CONTENTS: &[&str] = &["+ /stats/kinetic_energy", "+ /params/**"];
+/// Milliseconds per step (1–10) would flatten the energy (J, ≪ 1) and the thresholds.
+const TIMING_CONTENTS: &[&str] = &["+ /stats/step_ms", "+ /stats/dropped_frames"];
 const LOG_CONTENTS: &[&str] = &["+ /events/**", "+ /log"];
 
-/// The default layout, one table for both blueprint builders: the 3D view on the left (3/5),
-/// and on the right, top to bottom: counts, energy/time/parameters, the text log.
-fn layout(style_name: &str) -> (ViewSpec, [ViewSpec; 3]) {
+/// The default layout, one table for both blueprint builders: the 3D view on the left (3/5);
+/// on the right the four plots in a 2×2 grid (nodes and adaptation events, collisions, energy
+/// and parameters, timing) above the text log.
+fn layout(style_name: &str) -> (ViewSpec, [ViewSpec; 4], ViewSpec) {
     let title = if style_name.is_empty() {
         "hair".to_owned()
     } else {
         format!("hair: {style_name}")
+    };
+    let plot = |name: &str, contents| ViewSpec {
+        class: "TimeSeries",
+        name: name.to_owned(),
+        contents,
     };
     (
         ViewSpec {
@@ -538,50 +602,56 @@ fn layout(style_name: &str) -> (ViewSpec, [ViewSpec; 3]) {
             contents: SPATIAL_CONTENTS,
         },
         [
-            ViewSpec {
-                class: "TimeSeries",
-                name: "counts".to_owned(),
-                contents: COUNT_CONTENTS,
-            },
-            ViewSpec {
-                class: "TimeSeries",
-                name: "energy, step time, parameters".to_owned(),
-                contents: ENERGY_CONTENTS,
-            },
-            ViewSpec {
-                class: "TextLog",
-                name: "events and log".to_owned(),
-                contents: LOG_CONTENTS,
-            },
+            plot("nodes, splits, merges", NODE_CONTENTS),
+            plot("collisions", COLLISION_CONTENTS),
+            plot("energy, parameters", ENERGY_CONTENTS),
+            plot("step time", TIMING_CONTENTS),
         ],
+        ViewSpec {
+            class: "TextLog",
+            name: "events and log".to_owned(),
+            contents: LOG_CONTENTS,
+        },
     )
 }
 
 const COLUMN_SHARES: [f32; 2] = [3.0, 2.0];
-const ROW_SHARES: [f32; 3] = [1.0, 1.0, 1.0];
+/// Plot grid, text log.
+const ROW_SHARES: [f32; 2] = [3.0, 1.0];
+const PLOT_COLUMNS: u32 = 2;
+/// Blueprint, selection and time panel at start.
+const PANEL_STATES: (PanelState, PanelState, PanelState) = (
+    PanelState::Collapsed,
+    PanelState::Collapsed,
+    PanelState::Collapsed,
+);
 
 /// The default layout through the SDK's high-level blueprint API. It cannot place the 3D camera
 /// (the Rust `Spatial3DView` of 0.36 has no eye-controls setter); [`Logger::new`] sends
 /// [`send_blueprint`]'s equivalent layout that does.
 pub fn blueprint() -> rerun::blueprint::Blueprint {
     use rerun::blueprint::{
-        Blueprint, ContainerLike, Horizontal, Spatial3DView, TextLogView, TimeSeriesView, Vertical,
+        Blueprint, BlueprintPanel, ContainerLike, Grid, Horizontal, SelectionPanel, Spatial3DView,
+        TextLogView, TimePanel, TimeSeriesView, Vertical,
     };
-    let (spatial, right) = layout("");
-    let right: Vec<ContainerLike> = right
+    let (spatial, plots, log) = layout("");
+    let plots: Vec<ContainerLike> = plots
         .into_iter()
-        .map(|v| match v.class {
-            "TimeSeries" => TimeSeriesView::new(v.name)
+        .map(|v| {
+            assert_eq!(v.class, "TimeSeries", "layout(): plots are time series");
+            TimeSeriesView::new(v.name)
                 .with_origin("/")
                 .with_contents(v.contents.iter().copied())
-                .into(),
-            "TextLog" => TextLogView::new(v.name)
-                .with_origin("/")
-                .with_contents(v.contents.iter().copied())
-                .into(),
-            other => panic!("layout(): no high-level builder for view class {other}"),
+                .into()
         })
         .collect();
+    let right: Vec<ContainerLike> = vec![
+        Grid::new(plots).with_grid_columns(PLOT_COLUMNS).into(),
+        TextLogView::new(log.name)
+            .with_origin("/")
+            .with_contents(log.contents.iter().copied())
+            .into(),
+    ];
     Blueprint::new(
         Horizontal::new([
             Spatial3DView::new(spatial.name)
@@ -594,6 +664,9 @@ pub fn blueprint() -> rerun::blueprint::Blueprint {
     )
     .with_auto_layout(false)
     .with_auto_views(false)
+    .with_blueprint_panel(BlueprintPanel::from_state(PANEL_STATES.0))
+    .with_selection_panel(SelectionPanel::from_state(PANEL_STATES.1))
+    .with_time_panel(TimePanel::new().with_state(PANEL_STATES.2))
 }
 
 /// A fixed id for blueprint object `k`: a well-formed (version 4, RFC 4122 variant) UUID so the
@@ -646,7 +719,7 @@ pub fn send_blueprint(
     // The viewer identifies blueprint data by this timeline.
     bp.set_time_sequence("blueprint", 0);
 
-    let (spatial, right) = layout(style_name);
+    let (spatial, plots, log) = layout(style_name);
     let log_view = |id: &Uuid, v: &ViewSpec| -> anyhow::Result<String> {
         let path = format!("view/{}", uuid_string(id));
         bp.log(
@@ -674,11 +747,21 @@ pub fn send_blueprint(
             .with_eye_up([0.0f32, 1.0, 0.0]),
     )?;
 
-    let mut right_paths = Vec::with_capacity(right.len());
-    for (k, v) in right.iter().enumerate() {
-        right_paths.push(log_view(&blueprint_uuid(2 + k as u8), v)?);
+    let mut plot_paths = Vec::with_capacity(plots.len());
+    for (k, v) in plots.iter().enumerate() {
+        plot_paths.push(log_view(&blueprint_uuid(2 + k as u8), v)?);
     }
+    let log_path = log_view(&blueprint_uuid(9), &log)?;
 
+    let grid = blueprint_uuid(12);
+    let grid_path = format!("container/{}", uuid_string(&grid));
+    bp.log(
+        grid_path.as_str(),
+        &ContainerBlueprint::new(ContainerKind::Grid)
+            .with_contents(plot_paths.iter().map(|p| IncludedContent::from(p.as_str())))
+            .with_grid_columns(PLOT_COLUMNS),
+    )?;
+    let right_paths = [grid_path, log_path];
     let vertical = blueprint_uuid(10);
     let vertical_path = format!("container/{}", uuid_string(&vertical));
     bp.log(
@@ -707,6 +790,20 @@ pub fn send_blueprint(
             .with_root_container(RootContainer(root))
             .with_auto_layout(AutoLayout::from(false))
             .with_auto_views(AutoViews::from(false)),
+    )?;
+    // The side panels start collapsed and the time panel as a bar: the hair and the plots get
+    // the room; all of them open again from the viewer's top-right buttons.
+    bp.log(
+        "blueprint_panel",
+        &PanelBlueprint::new().with_state(PANEL_STATES.0),
+    )?;
+    bp.log(
+        "selection_panel",
+        &PanelBlueprint::new().with_state(PANEL_STATES.1),
+    )?;
+    bp.log(
+        "time_panel",
+        &TimePanelBlueprint::new().with_state(PANEL_STATES.2),
     )?;
     bp.flush_blocking()
         .map_err(|e| anyhow::anyhow!("flushing the blueprint stream: {e}"))?;

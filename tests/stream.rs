@@ -7,7 +7,7 @@ use rerun::external::re_log_types::LogMsg;
 use rerun::log::Chunk;
 use rerun::{
     AnnotationContext, Capsules3D, ComponentIdentifier, Ellipsoids3D, LineStrips3D, Points3D,
-    Scalars, TextLog, TimelineName, ViewCoordinates,
+    Scalars, SeriesLines, TextLog, TimelineName, ViewCoordinates,
 };
 use wisptree::frame::Frame;
 use wisptree::sim::report::{AdaptEvent, Counters, EventKind};
@@ -422,9 +422,25 @@ fn static_context_and_blueprint_are_sent() {
                 && !k.contains("/ViewContents")
                 && !k.contains("Eye"))
             .count(),
-        4,
+        6,
         "{bp:?}"
     );
+    // Time series colours: each level's curve in its level's colour.
+    let series = SeriesLines::descriptor_colors().component;
+    for l in 0..LEVELS {
+        let path: rerun::EntityPath = paths::active_nodes_level(l as usize).into();
+        let colors: Vec<u32> = d
+            .recording
+            .iter()
+            .filter(|c| *c.entity_path() == path && c.is_static())
+            .flat_map(|c| {
+                c.iter_component::<rerun::components::Color>(series)
+                    .collect::<Vec<_>>()
+            })
+            .flat_map(|item| item.iter().map(|c| c.0 .0).collect::<Vec<_>>())
+            .collect();
+        assert_eq!(colors, vec![stream::level_color(l, LEVELS).0], "level {l}");
+    }
 }
 
 #[test]
