@@ -2,6 +2,7 @@
 //! behaves under a motion.
 //!
 //! `cargo run --release --example probe -- styles/long.ron lean 5 [split_threshold]`
+//! (`WT_EPS=0.01` overrides the contact epsilon, `WT_EVENTS=1` prints the events after 3 s)
 
 use std::path::Path;
 use std::sync::Arc;
@@ -24,6 +25,9 @@ fn main() -> anyhow::Result<()> {
     let mut sim = Simulation::from_style(model.clone(), &loaded.style, motion, false);
     if let Some(t) = args.get(3) {
         sim.params.split_threshold = t.parse()?;
+    }
+    if let Ok(e) = std::env::var("WT_EPS") {
+        sim.params.contact_epsilon = e.parse()?;
     }
     let mut r = StepReport::default();
     let (mut splits, mut merges) = (0, 0);

@@ -199,6 +199,8 @@ pub struct ModelResult {
     pub awt_ms_per_step: f64,
     /// Single-level / AWT.
     pub ratio: f64,
+    /// AWT with the hair–hair search shared by two threads (not part of the one-core table).
+    pub awt_two_threads_ms_per_step: Option<f64>,
     /// AWT run: active nodes per step (root nodes included).
     pub mean_active_nodes: f64,
     pub max_active_nodes: usize,
@@ -248,8 +250,8 @@ pub struct RunPipelineResult {
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct BenchReport {
     pub machine: String,
-    /// Threads in rayon's global pool (used only if the simulation uses rayon).
-    pub rayon_threads: usize,
+    /// Threads of the hair–hair search in `wisptree run` (the pipeline timings).
+    pub run_threads: usize,
     pub sim_seconds: f64,
     pub motion: String,
     pub models: Vec<ModelResult>,
@@ -306,17 +308,15 @@ fn default_styles_dir() -> PathBuf {
     }
 }
 
-/// A simulation of `path` under `lean`, settled, ready for step 1.
-pub fn simulation(path: &Path, single_level: bool) -> anyhow::Result<Simulation> {
+/// A simulation of `path` under `lean`, settled, ready for step 1, its hair–hair search on
+/// `threads` threads.
+pub fn simulation(path: &Path, single_level: bool, threads: usize) -> anyhow::Result<Simulation> {
     let (loaded, model) = crate::cli::load_model(path)?;
     let model = Arc::new(model);
     let motion = crate::motion::Motion::parse(MOTION, Point3::from(model.scalp_center))?;
-    Ok(Simulation::from_style(
-        model,
-        &loaded.style,
-        motion,
-        single_level,
-    ))
+    let mut sim = Simulation::from_style(model, &loaded.style, motion, single_level);
+    sim.set_threads(threads);
+    Ok(sim)
 }
 
 fn steps_for(seconds: f64, dt: f64) -> usize {
@@ -330,15 +330,23 @@ pub fn bench_model(
     seconds: f64,
     progress: &ProgressBar,
 ) -> anyhow::Result<ModelResult> {
-    let mut results = Vec::with_capacity(2);
+    let mut results = Vec::with_capacity(3);
     let mut shape = (0, 0, 0.0, 0);
-    for single_level in [true, false] {
-        progress.set_message(format!(
-            "{name} {} (settling)",
-            if single_level { "single-level" } else { "AWT" }
-        ));
-        let mut sim =
-            simulation(path, single_level).with_context(|| format!("setting up model {name}"))?;
+    // The table is on one core: single-level and AWT with the hair–hair search on one thread;
+    // then AWT again with the search shared with the helper thread (same result, bit for bit).
+    let mut runs = vec![(true, 1), (false, 1)];
+    if crate::sim::default_threads() > 1 {
+        runs.push((false, 2));
+    }
+    for &(single_level, threads) in &runs {
+        let mode = match (single_level, threads) {
+            (true, _) => "single-level",
+            (false, 1) => "AWT",
+            _ => "AWT, 2 threads",
+        };
+        progress.set_message(format!("{name} {mode} (settling)"));
+        let mut sim = simulation(path, single_level, threads)
+            .with_context(|| format!("setting up model {name}"))?;
         let dt = sim.params.dt;
         let steps = steps_for(seconds, dt);
         let m = &sim.model;
@@ -348,12 +356,10 @@ pub fn bench_model(
             dt,
             steps,
         );
-        progress.set_message(format!(
-            "{name} {}",
-            if single_level { "single-level" } else { "AWT" }
-        ));
+        progress.set_message(format!("{name} {mode}"));
         results.push(time_steps(&mut sim, steps, || progress.inc(1)));
     }
+    let awt_two_threads = (runs.len() > 2).then(|| results.pop().expect("three runs"));
     let awt = results.pop().expect("two runs");
     let single = results.pop().expect("two runs");
     let (finest_nodes, levels, dt, steps) = shape;
@@ -364,6 +370,7 @@ pub fn bench_model(
         single_level_ms_per_step: single.mean_ms_per_step,
         awt_ms_per_step: awt.mean_ms_per_step,
         ratio: single.mean_ms_per_step / awt.mean_ms_per_step,
+        awt_two_threads_ms_per_step: awt_two_threads.as_ref().map(|r| r.mean_ms_per_step),
         mean_active_nodes: awt.mean_active_nodes,
         max_active_nodes: awt.max_active_nodes,
         splits: awt.splits,
@@ -388,7 +395,7 @@ pub fn time_pipeline(
     progress: &ProgressBar,
 ) -> anyhow::Result<PipelineResult> {
     let t_start = Instant::now();
-    let mut sim = simulation(path, false)?;
+    let mut sim = simulation(path, false, 1)?;
     let name = model_name(&path.to_string_lossy());
     let levels = sim.model.level_count() as u16;
     let head = sim.model.scalp_center;
@@ -517,23 +524,38 @@ pub fn print_report(r: &BenchReport) {
         r.motion, r.sim_seconds
     );
     println!(
-        "machine: {}; simulation single-threaded unless it uses rayon ({} threads in rayon's pool)",
-        r.machine, r.rayon_threads
+        "machine: {}; single-level and AWT on one core; `AWT 2 thr`: the hair-hair search shared \
+         with a helper thread (same result), as `wisptree run` does ({} threads)",
+        r.machine, r.run_threads
     );
     println!();
     println!(
-        "{:<12} {:>6} {:>2} {:>12} {:>10} {:>7} {:>8} {:>7} {:>7} {:>7}",
-        "model", "N", "L", "single ms", "AWT ms", "ratio", "active", "max", "splits", "merges"
+        "{:<12} {:>6} {:>2} {:>12} {:>10} {:>7} {:>10} {:>8} {:>7} {:>7} {:>7}",
+        "model",
+        "N",
+        "L",
+        "single ms",
+        "AWT ms",
+        "ratio",
+        "AWT 2 thr",
+        "active",
+        "max",
+        "splits",
+        "merges"
     );
     for m in &r.models {
+        let two = m
+            .awt_two_threads_ms_per_step
+            .map_or_else(|| "-".to_string(), |t| format!("{t:.4}"));
         println!(
-            "{:<12} {:>6} {:>2} {:>12.3} {:>10.4} {:>7.1} {:>8.1} {:>7} {:>7} {:>7}",
+            "{:<12} {:>6} {:>2} {:>12.3} {:>10.4} {:>7.1} {:>10} {:>8.1} {:>7} {:>7} {:>7}",
             m.model,
             m.finest_nodes,
             m.levels,
             m.single_level_ms_per_step,
             m.awt_ms_per_step,
             m.ratio,
+            two,
             m.mean_active_nodes,
             m.max_active_nodes,
             m.splits,
@@ -650,7 +672,13 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
 
     // Progress in steps, assuming the paper's 10 ms step (only the bar's length depends on it).
     let per_run = steps_for(seconds, 0.01) as u64;
-    let total = per_run * 2 * paths.len() as u64 + if pipeline { 2 * per_run } else { 0 };
+    let runs_per_model = if crate::sim::default_threads() > 1 {
+        3
+    } else {
+        2
+    };
+    let total =
+        per_run * runs_per_model * paths.len() as u64 + if pipeline { 2 * per_run } else { 0 };
     let progress = ProgressBar::new(total);
     progress.set_style(
         ProgressStyle::with_template(
@@ -691,7 +719,7 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
 
     let report = BenchReport {
         machine: machine_description(),
-        rayon_threads: rayon::current_num_threads(),
+        run_threads: crate::sim::default_threads(),
         sim_seconds: seconds,
         motion: MOTION.to_string(),
         models,

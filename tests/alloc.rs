@@ -274,23 +274,10 @@ fn single_level_step_does_not_allocate_once_warm() {
 }
 
 /// The adaptive step on Long (3 levels, rigid links, the most splits and merges of the four
-/// styles).
-///
-/// Ignored: with the simulation as of this writing (working tree after commit 35344ab) the hair
-/// on Long does not settle into a repeating state within 4 lean periods, and period 4 still
-/// sets new maxima (active nodes 1001 → 1211, pairs in contact 30k → 50k): 25 allocations,
-/// 5.8 MB, from the `Slots` pushes in `Simulation::gather`/`refresh_slot_constants`, and
-/// `HairCollider::accumulate`'s `contacts.push`, `build_grid`'s `cell_start`/`items` resizes and
-/// `lo`/`hi` pushes, `apply_contacts`' `node_mass`/`load` resizes, and `awt::adapt`'s
-/// `events.push`. (At commit 35344ab itself periods 3 and 4 made none.) All are buffers growing
-/// to a new high-water mark; reserving them from the model's size at construction removes them.
+/// styles), in the 4th `lean` period.
 #[test]
-#[ignore = "fails: new high-water marks in period 4 (gather, collider contacts/grid, events)"]
 fn awt_step_does_not_allocate_once_warm_long() {
     let t = awt_allocations("long.ron");
-    // The instrument sees the warm-up growth through `step` (slots, grid, event list)...
-    assert!(t[0].allocs > 0, "{}", describe("long AWT, period 1", &t[0]));
-    // ...and none once the motion repeats.
     assert_eq!(t[3].allocs, 0, "{}", describe("long AWT, period 4", &t[3]));
 }
 
@@ -307,29 +294,28 @@ fn awt_step_does_not_allocate_once_warm_long_curly() {
 }
 
 /// The stricter goal: no allocation even while the active set, the contact list and the grid
-/// grow, i.e. every buffer reserved from the model's size when the simulation is built.
+/// grow, from the very first step: every buffer is reserved from the model's size when the
+/// simulation is built (`Slots`, the collider's grid, cell lists and contact list, the adapt
+/// scratch) or by `Simulation::new_report` (events, per-level counts).
 ///
-/// Ignored because it fails today. Every allocation counted here is a buffer growing to a new
-/// high-water mark (none recurs once the motion repeats, see the tests above), at these sites
-/// (Long, first `lean` period):
-/// * `Simulation::gather` / `refresh_slot_constants`: the `Slots` vectors (pushes) when the
-///   active set exceeds its previous maximum (bounded by the finest node count);
-/// * `HairCollider::accumulate`: `contacts.push` (the largest, MBs), and in `build_grid`
-///   `cell_start.resize` (bounded by `MAX_CELLS + 1`), `lo`/`hi` pushes, `items.resize`; in
-///   `apply_contacts` `node_mass`/`load` resizes;
-/// * `awt::adapt`: `events.push` into `StepReport::events` (splits and merges), `merge_test`'s
-///   `scratch.sub_pos.push`, `Forest::collect_active`'s `children.push` (from
-///   `children_to_present` in `split` and `merge`);
-/// * `Simulation::step`: `counters.active_per_level.resize` on a fresh `StepReport`.
+/// The hair–hair search runs on two threads here (`default_threads` on a 2-core machine, forced
+/// below); the helper thread only ever pushes into its own contact list, reserved when it starts,
+/// and this counter sees only the test thread, so the collider's reserved bytes are checked too.
 #[test]
-#[ignore = "fails: buffers grow during the first lean period; see the list above"]
 fn awt_step_does_not_allocate_from_the_first_step() {
     let mut sim = simulation("long.ron", false);
-    let mut report = StepReport::default();
+    sim.set_threads(2);
+    let mut report = sim.new_report();
     let mut highs = Highs::default();
     let steps = period_steps(&sim);
+    let reserved = sim.reserved_bytes();
     let t = count_steps(&mut sim, &mut report, &mut highs, steps);
     assert_eq!(t.allocs, 0, "{}", describe("long AWT, first period", &t));
+    assert_eq!(
+        sim.reserved_bytes(),
+        reserved,
+        "the collider's buffers (incl. the helper thread's) grew"
+    );
 }
 
 /// Building a display frame (followers, Catmull-Rom strands) reuses its buffers.

@@ -203,6 +203,40 @@ fn two_runs_with_the_same_inputs_are_bit_identical() {
     }
 }
 
+/// The hair–hair pair search on one thread or shared with a helper thread gives the same
+/// simulation, bit for bit (on a shipped style big enough for the search to be shared).
+#[test]
+fn one_and_two_collider_threads_are_bit_identical() {
+    let (loaded, model) = shipped("long.ron");
+    let run = |threads: usize| {
+        let mut sim = Simulation::from_style(model.clone(), &loaded.style, motion("lean"), false);
+        sim.set_threads(threads);
+        assert_eq!(sim.threads(), threads);
+        let mut r = StepReport::default();
+        let (mut events, mut contacts) = (0, 0);
+        for _ in 0..60 {
+            sim.step(&mut r);
+            events += r.events.len();
+            contacts += r.counters.pairs_in_contact;
+        }
+        (
+            sim.slots.pos.clone(),
+            sim.slots.vel.clone(),
+            events,
+            contacts,
+        )
+    };
+    let (a, b) = (run(1), run(2));
+    assert!(a.3 > 0, "the run should have hair-hair contacts");
+    assert_eq!((a.2, a.3), (b.2, b.3));
+    assert_eq!(a.0.len(), b.0.len());
+    for (x, y) in a.0.iter().zip(&b.0).chain(a.1.iter().zip(&b.1)) {
+        for d in 0..3 {
+            assert_eq!(x[d].to_bits(), y[d].to_bits());
+        }
+    }
+}
+
 #[test]
 fn wind_pushes_hair_downwind() {
     let calm = rigid_text("split_threshold: 100.0");

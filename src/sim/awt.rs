@@ -56,6 +56,22 @@ pub struct AdaptScratch {
     pub merge_refused: [u32; 3],
 }
 
+impl AdaptScratch {
+    /// Scratch with room for the largest number of sub-GCs of any GC of `m`.
+    pub fn for_model(m: &HairModel) -> AdaptScratch {
+        let subs = m
+            .levels
+            .iter()
+            .flat_map(|lv| lv.sub_gcs.iter().map(|r| r.len()))
+            .max()
+            .unwrap_or(0);
+        AdaptScratch {
+            sub_pos: Vec::with_capacity(subs),
+            merge_refused: [0; 3],
+        }
+    }
+}
+
 /// The smallest rotation taking direction `from` to direction `to` (both non-zero).
 pub fn min_rotation(from: &Vector3<f64>, to: &Vector3<f64>) -> Matrix3<f64> {
     let a = from.normalize();

@@ -36,28 +36,34 @@
 //!   cell ranges, so each pair sharing a voxel is tested once without a pair set or hashing (the
 //!   rule is one AND of two 3-bit masks stored in the cell lists, see [`HairCollider`]). Cell lists
 //!   are filled in segment order, so the forces depend only on the input.
-//! * **Cell size: twice the mean segment length.** The coarse wisps are fat (radius up to
-//!   ~7 cm, larger than a segment) and most pairs that share a voxel really are close, so the
+//! * **Cell size: three mean segment lengths.** The coarse wisps are fat (radius up to ~7 cm,
+//!   larger than a segment) and most pairs that share a voxel really are close, so the
 //!   closest-point tests dominate and the grid only has to keep its own costs below them. Smaller
 //!   cells put a fat wisp in dozens of cells and the pair visits repeated in every shared cell
 //!   grow faster than the pairs pruned (one mean length: 350 k cell-pair visits per step on
-//!   `long` for 25 k candidates); larger cells, like the old side of the inflated boxes, let more
-//!   distant pairs through (four lengths: 42 k candidates for 17 k tested). Measured on `long` and
-//!   `long_curly` under `lean`, cells of 2 mean lengths were among the fastest (2–4 lengths within
-//!   the noise) with the fewest candidates of those: ~1.9 (resp. 1.7) per pair tested. The dense
-//!   array is capped at [`CELLS_PER_SEGMENT`] cells per segment (clearing and scanning it cost per
-//!   cell) and at [`MAX_CELLS`] in all (the cell side grows instead), which bounds time and memory
-//!   when a node flies away.
-//! * **Filters are exact.** Box overlap (boxes inflated by `r1 + r2`), adjacency and the
+//!   `long` for 25 k candidates); larger cells let more distant pairs through, which costs little
+//!   now that a candidate is rejected on a 32-byte [`SegBox`], but beyond ~6 lengths there are so
+//!   few cells that the search can no longer be cut into balanced halves for two threads.
+//!   Measured with `examples/interactions.rs` on the four paper styles under `lean`: 2–4 lengths within
+//!   the noise of one another. The dense array is capped at [`CELLS_PER_SEGMENT`] cells per
+//!   segment (clearing and scanning it cost per cell) and at [`MAX_CELLS`] in all (the cell side
+//!   grows instead), which bounds time and memory when a node flies away.
+//! * **Filters are conservative and shared.** Box overlap (each box inflated by its own radius
+//!   and rounded outwards to f32, so two boxes overlap whenever the segments are within
+//!   `r1 + r2` on every axis), adjacency and the
 //!   relative-motion test are symmetric and computed from per-segment data gathered once per step;
 //!   the closest points and the response are computed with the lower segment index first (cell
 //!   lists are ascending), as in [`accumulate_brute_force`], so both find the same contacts with
 //!   bit-identical pair forces (only the order in which they are summed differs).
-//! * **One thread.** Splitting the pair search into chunks run by rayon (own contact list per
-//!   chunk, applied in chunk order) was measured at 15–30 % faster on 2 busy cores, but every call from
-//!   outside the pool pushes a job on rayon's injector, which allocates a 1.5 kB block every 63
-//!   jobs: that breaks the no-allocation-once-warm guarantee (tests/alloc.rs), so the grid runs on
-//!   the calling thread.
+//! * **Two threads, same forces.** The pair search (the cell loop and the closest points, ~¾ of
+//!   the stage) can be shared with one helper thread, see [`HairCollider`]; the contacts are
+//!   applied in the one-thread order, so the result is bit-identical. rayon was tried first
+//!   (15–30 % faster on 2 busy cores) but every call from outside its pool pushes a job on its
+//!   injector, which allocates a 1.5 kB block every 63 jobs and breaks the no-allocation
+//!   guarantee (tests/alloc.rs); a parked helper thread with its own buffers does not.
+
+use std::ops::Range;
+use std::sync::{Arc, Condvar, Mutex, RwLock};
 
 use nalgebra::Vector3;
 
@@ -109,6 +115,10 @@ pub struct ContactParams {
 }
 
 /// One pair of segments in contact: where, and the unscaled eq. 1 and eq. 2 forces on `a`.
+///
+/// The forces are stored in f32: they only scale the f64 force accumulators, the same rounded
+/// value goes to both sides (so pair forces still cancel exactly), and the list is the largest
+/// buffer of the step (tens of thousands of entries), so halving it keeps it in cache.
 #[derive(Debug, Clone, Copy)]
 pub struct Contact {
     pub a: u32,
@@ -117,10 +127,8 @@ pub struct Contact {
     pub s: f64,
     pub t: f64,
     /// Friction (eq. 1) and repulsion (eq. 2) on `a`; `b` gets the opposite.
-    pub friction: Vector3<f64>,
-    pub repulsion: Vector3<f64>,
-    /// The mass in k_f = α·m and k_r·m (the lighter child).
-    pub mass: f64,
+    pub friction: [f32; 3],
+    pub repulsion: [f32; 3],
 }
 
 impl ContactParams {
@@ -164,8 +172,11 @@ pub const MAX_CELLS: usize = 1 << 20;
 /// so beyond a few cells per segment the scan of empty cells costs more than it prunes.
 pub const CELLS_PER_SEGMENT: usize = 8;
 
+/// Cell-list entries reserved per segment by [`HairCollider::with_capacity`].
+const ITEMS_PER_SEGMENT: usize = 32;
+
 /// Cell side in mean segment lengths (see the module docs).
-const CELL_IN_SEGMENT_LENGTHS: f64 = 2.0;
+const CELL_IN_SEGMENT_LENGTHS: f64 = 3.0;
 
 /// The mask bits of an item of a cell list (see [`HairCollider`]): bit `k` set when the segment's
 /// cell range starts below this cell along axis `k`.
@@ -208,20 +219,25 @@ impl GridInfo {
     }
 
     /// Inclusive cell range `(lo, hi)` of segment `i`: the cells its box, inflated by its radius
-    /// (plus a relative 1e-12, see [`broad_box`]), touches.
+    /// (and rounded outwards to f32, as the pair filter sees it), touches.
     pub fn cell_range(
         &self,
         segs: &SegmentsView,
         pos: &[Vector3<f64>],
         i: usize,
     ) -> ([u32; 3], [u32; 3]) {
-        let (lo, hi) = broad_box(segs, pos, i);
+        self.box_cells(&SegBox::new(segs, pos, i))
+    }
+
+    fn box_cells(&self, b: &SegBox) -> ([u32; 3], [u32; 3]) {
+        let (lo, hi) = b.bounds();
         (self.cell_of(&lo), self.cell_of(&hi))
     }
 }
 
-/// Reused buffers of the broad phase (uniform voxel grid) and of the response. Allocation only
-/// while warming up.
+/// Reused buffers of the broad phase (uniform voxel grid) and of the response, and the helper
+/// thread that shares the pair search. Allocation only while warming up (or never, with
+/// [`HairCollider::with_capacity`] from the model's size).
 ///
 /// The grid is dense over the segments' bounding box and filled by a counting sort. Each item of
 /// a cell list is a segment index with, in its top 3 bits, a mask saying along which axes the
@@ -229,9 +245,41 @@ impl GridInfo {
 /// its two cell ranges, i.e. to the one shared cell where, on every axis, at least one of the two
 /// ranges starts: there the two masks have no bit in common. So the "tested once" rule is one AND
 /// on data already in the cell list, without a pair set or a lookup of the ranges.
-#[derive(Default)]
+///
+/// Per-segment data is split by temperature: the pair loop reads only [`SegBox`] (32 bytes, the
+/// whole scene fits in L1), and [`SegPre`] (positions, velocities, f64) only for the pairs that
+/// pass the box and adjacency tests.
+///
+/// **Two threads, same result.** With [`Self::set_threads`]`(2)` the cells are cut in two runs
+/// of about equal work; a helper thread (spawned once, then parked on a condition variable)
+/// searches the second while the caller searches the first. Loads and forces are then applied
+/// from the first run's contacts followed by the second's, which is exactly the order of the
+/// one-thread search, so the forces are bit-identical whatever the thread count. The helper
+/// works on buffers it keeps, so a warm step allocates nothing (rayon's injector would: see the
+/// module docs).
 pub struct HairCollider {
-    /// Per segment: its data for the pair tests.
+    broad: Arc<RwLock<Broad>>,
+    contacts: Vec<Contact>,
+    load: Vec<f64>,
+    node_mass: Vec<f64>,
+    threads: usize,
+    helper: Option<Helper>,
+    /// Contacts the helper thread found in the last call.
+    helper_contacts: u32,
+}
+
+impl Default for HairCollider {
+    fn default() -> Self {
+        Self::with_capacity(0, 0, 0)
+    }
+}
+
+/// The grid and the per-segment data, written by the caller, then read by both threads.
+#[derive(Default)]
+struct Broad {
+    /// Per segment: inflated box and node slots (hot).
+    boxes: Vec<SegBox>,
+    /// Per segment: its data for the relative-motion test and the closest points (cold).
     pre: Vec<SegPre>,
     /// Per segment: min and max cell coordinates of its box.
     lo: Vec<[u32; 3]>,
@@ -241,28 +289,81 @@ pub struct HairCollider {
     /// Segment index | mask << [`MASK_SHIFT`], grouped by cell, ascending index within a cell.
     items: Vec<u32>,
     grid: GridInfo,
-    contacts: Vec<Contact>,
-    load: Vec<f64>,
-    node_mass: Vec<f64>,
 }
+
+/// Below this many segments the pair search stays on one thread (the hand-over costs more).
+const MIN_SEGMENTS_TO_SHARE: usize = 128;
 
 impl HairCollider {
     pub fn new() -> Self {
         Self::default()
     }
 
+    /// A collider whose buffers already hold `segments` segments over `nodes` node slots and
+    /// `contacts` contacts, so that steps within those sizes never allocate. One thread.
+    pub fn with_capacity(segments: usize, nodes: usize, contacts: usize) -> Self {
+        let cells = if segments == 0 {
+            0
+        } else {
+            (CELLS_PER_SEGMENT * segments).clamp(64, MAX_CELLS) + 1
+        };
+        let broad = Broad {
+            boxes: Vec::with_capacity(segments),
+            pre: Vec::with_capacity(segments),
+            lo: Vec::with_capacity(segments),
+            hi: Vec::with_capacity(segments),
+            cell_start: Vec::with_capacity(cells),
+            items: Vec::with_capacity(ITEMS_PER_SEGMENT * segments),
+            grid: GridInfo::default(),
+        };
+        HairCollider {
+            broad: Arc::new(RwLock::new(broad)),
+            contacts: Vec::with_capacity(contacts),
+            load: Vec::with_capacity(nodes),
+            node_mass: Vec::with_capacity(nodes),
+            threads: 1,
+            helper: None,
+            helper_contacts: 0,
+        }
+    }
+
+    /// Threads used by the pair search: 1, or 2 (more are treated as 2). The forces do not
+    /// depend on it. The helper thread starts here (once), with room for as many contacts as
+    /// this collider has reserved, so no later step allocates for it.
+    pub fn set_threads(&mut self, threads: usize) {
+        self.threads = threads.clamp(1, 2);
+        if self.threads > 1 && self.helper.is_none() {
+            self.helper = Some(Helper::spawn(self.broad.clone(), self.contacts.capacity()));
+        }
+    }
+
+    pub fn threads(&self) -> usize {
+        self.threads
+    }
+
+    /// How many of the last call's contacts the helper thread found (0 on one thread).
+    pub fn helper_contacts(&self) -> u32 {
+        self.helper_contacts
+    }
+
     /// The grid built by the last call to [`Self::accumulate`].
     pub fn grid(&self) -> GridInfo {
-        self.grid
+        read(&self.broad).grid
     }
 
     /// Bytes reserved by the reused buffers (stays constant once warmed up on a scene size).
     pub fn capacity_bytes(&self) -> usize {
-        self.pre.capacity() * std::mem::size_of::<SegPre>()
-            + (self.lo.capacity() + self.hi.capacity()) * std::mem::size_of::<[u32; 3]>()
-            + (self.cell_start.capacity() + self.items.capacity()) * 4
+        let b = read(&self.broad);
+        let helper = self.helper.as_ref().map_or(0, |h| {
+            lock(&h.shared.job).contacts.capacity() * std::mem::size_of::<Contact>()
+        });
+        b.boxes.capacity() * std::mem::size_of::<SegBox>()
+            + b.pre.capacity() * std::mem::size_of::<SegPre>()
+            + (b.lo.capacity() + b.hi.capacity()) * std::mem::size_of::<[u32; 3]>()
+            + (b.cell_start.capacity() + b.items.capacity()) * 4
             + self.contacts.capacity() * std::mem::size_of::<Contact>()
             + (self.load.capacity() + self.node_mass.capacity()) * 8
+            + helper
     }
 
     /// Adds the hair–hair friction and repulsion forces to `force` (indexed by slot).
@@ -274,71 +375,137 @@ impl HairCollider {
         p: &ContactParams,
         force: &mut [Vector3<f64>],
     ) -> PairStats {
-        let mut stats = PairStats::default();
         let n = segs.len();
         if n < 2 {
-            return stats;
+            return PairStats::default();
         }
         assert!(
             n < 1 << MASK_SHIFT,
             "too many segments for the cell lists: {n}"
         );
-        self.pre.clear();
-        self.pre
-            .extend((0..n).map(|i| SegPre::new(segs, pos, vel, i)));
-        self.build_grid(segs, pos);
-        let pre = &self.pre[..];
+        {
+            let mut b = write(&self.broad);
+            b.boxes.clear();
+            b.boxes.extend((0..n).map(|i| SegBox::new(segs, pos, i)));
+            b.pre.clear();
+            b.pre.extend((0..n).map(|i| SegPre::new(segs, pos, vel, i)));
+            b.build();
+        }
+        let eps2 = p.epsilon * p.epsilon;
+        self.contacts.clear();
+        let broad = read(&self.broad);
+        let ncells = broad.cell_start.len() - 1;
+        let mut response = Response::new(segs, force.len(), &mut self.node_mass, &mut self.load);
+        self.helper_contacts = 0;
+        let stats = if self.threads > 1 && n >= MIN_SEGMENTS_TO_SHARE {
+            let split = broad.balanced_split();
+            let helper = self
+                .helper
+                .as_ref()
+                .expect("set_threads started the helper");
+            helper.start(split..ncells, *p);
+            let mut stats = broad.search(0..split, p, eps2, &mut self.contacts);
+            let job = helper.wait();
+            stats.add(&job.stats);
+            self.helper_contacts = job.stats.in_contact;
+            for c in self.contacts.iter().chain(&job.contacts) {
+                response.record(c, segs);
+            }
+            response.apply(&[&self.contacts, &job.contacts], segs, p, force);
+            stats
+        } else {
+            let stats = broad.search(0..ncells, p, eps2, &mut self.contacts);
+            for c in &self.contacts {
+                response.record(c, segs);
+            }
+            response.apply(&[&self.contacts], segs, p, force);
+            stats
+        };
+        stats
+    }
+}
+
+impl Drop for HairCollider {
+    fn drop(&mut self) {
+        if let Some(h) = self.helper.take() {
+            h.stop();
+        }
+    }
+}
+
+impl Broad {
+    /// Tests the pairs of cells `cells`, appending the contacts (in cell order) to `out`.
+    fn search(
+        &self,
+        cells: Range<usize>,
+        p: &ContactParams,
+        eps2: f64,
+        out: &mut Vec<Contact>,
+    ) -> PairStats {
+        let mut stats = PairStats::default();
+        let (boxes, pre) = (&self.boxes[..], &self.pre[..]);
         let items = &self.items[..];
         let starts = &self.cell_start[..];
-        let eps2 = p.epsilon * p.epsilon;
-        let contacts = &mut self.contacts;
-        contacts.clear();
+        let before = out.len();
         const INDEX: u32 = (1 << MASK_SHIFT) - 1;
-        for c in 0..starts.len() - 1 {
+        for c in cells {
             let cell = &items[starts[c] as usize..starts[c + 1] as usize];
             if cell.len() < 2 {
                 continue;
             }
             for (k, &ia) in cell.iter().enumerate() {
-                let sa = &pre[(ia & INDEX) as usize];
+                let ma = ia >> MASK_SHIFT;
+                let a = (ia & INDEX) as usize;
+                let ba = &boxes[a];
                 for &ib in &cell[k + 1..] {
                     // Only in the min corner of the overlap of the two cell ranges (see above).
-                    if (ia & ib) >> MASK_SHIFT != 0 {
+                    if ma & (ib >> MASK_SHIFT) != 0 {
                         continue;
                     }
                     stats.candidates += 1;
-                    let sb = &pre[(ib & INDEX) as usize];
-                    if !pair_filter(sa, sb, eps2) {
+                    let b = (ib & INDEX) as usize;
+                    if !near(ba, &boxes[b]) || !moving(&pre[a], &pre[b], eps2) {
                         continue;
                     }
                     stats.tested += 1;
-                    // Cell lists are ascending: `sa` has the lower index, as `contact` wants.
-                    if let Some(c) = contact(sa, sb, p) {
-                        contacts.push(c);
+                    // Cell lists are ascending: `a` has the lower index, as `contact` wants.
+                    if let Some(c) = contact(&pre[a], &pre[b], p) {
+                        out.push(c);
                     }
                 }
             }
         }
-        stats.in_contact = contacts.len() as u32;
-        apply_contacts(
-            contacts,
-            segs,
-            p,
-            &mut self.node_mass,
-            &mut self.load,
-            force,
-        );
+        stats.in_contact = (out.len() - before) as u32;
         stats
     }
 
+    /// The cell at which to cut the search in two runs of about equal work (pairs visited).
+    fn balanced_split(&self) -> usize {
+        let starts = &self.cell_start[..];
+        let work = |c: usize| {
+            let k = (starts[c + 1] - starts[c]) as u64;
+            k * k.saturating_sub(1) / 2
+        };
+        let ncells = starts.len() - 1;
+        let total: u64 = (0..ncells).map(work).sum();
+        let mut acc = 0;
+        for c in 0..ncells {
+            acc += work(c);
+            if 2 * acc >= total {
+                return c + 1;
+            }
+        }
+        ncells
+    }
+
     /// The grid's geometry, then a counting sort of the segments into its dense cell array.
-    fn build_grid(&mut self, segs: &SegmentsView, pos: &[Vector3<f64>]) {
-        let n = segs.len();
+    fn build(&mut self) {
+        let n = self.boxes.len();
         let mut bmin = Vector3::repeat(f64::INFINITY);
         let mut bmax = Vector3::repeat(f64::NEG_INFINITY);
         let mut len_sum = 0.0;
-        for (i, s) in self.pre.iter().enumerate() {
-            let (lo, hi) = broad_box(segs, pos, i);
+        for (b, s) in self.boxes.iter().zip(&self.pre) {
+            let (lo, hi) = b.bounds();
             bmin = bmin.inf(&lo);
             bmax = bmax.sup(&hi);
             len_sum += s.len2.sqrt();
@@ -378,8 +545,8 @@ impl HairCollider {
         self.cell_start.resize(ncells + 1, 0);
         let [dx, dy, _] = grid.dims.map(|d| d as usize);
         let mut total = 0usize;
-        for i in 0..n {
-            let (lo, hi) = grid.cell_range(segs, pos, i);
+        for b in &self.boxes {
+            let (lo, hi) = grid.box_cells(b);
             self.lo.push(lo);
             self.hi.push(hi);
             for z in lo[2]..=hi[2] {
@@ -423,6 +590,147 @@ impl HairCollider {
     }
 }
 
+impl PairStats {
+    fn add(&mut self, o: &PairStats) {
+        self.candidates += o.candidates;
+        self.tested += o.tested;
+        self.in_contact += o.in_contact;
+    }
+}
+
+/// What the caller hands to the helper thread and gets back.
+struct Job {
+    state: JobState,
+    cells: Range<usize>,
+    params: Option<ContactParams>,
+    contacts: Vec<Contact>,
+    stats: PairStats,
+}
+
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum JobState {
+    Idle,
+    Run,
+    Done,
+    Failed,
+    Quit,
+}
+
+struct Shared {
+    broad: Arc<RwLock<Broad>>,
+    job: Mutex<Job>,
+    wake: Condvar,
+}
+
+/// The helper thread of [`HairCollider`].
+struct Helper {
+    shared: Arc<Shared>,
+    thread: Option<std::thread::JoinHandle<()>>,
+}
+
+impl Helper {
+    fn spawn(broad: Arc<RwLock<Broad>>, contacts: usize) -> Helper {
+        let shared = Arc::new(Shared {
+            broad,
+            job: Mutex::new(Job {
+                state: JobState::Idle,
+                cells: 0..0,
+                params: None,
+                contacts: Vec::with_capacity(contacts),
+                stats: PairStats::default(),
+            }),
+            wake: Condvar::new(),
+        });
+        let s = shared.clone();
+        let thread = std::thread::Builder::new()
+            .name("wisptree-collide".into())
+            .spawn(move || Helper::serve(&s))
+            .expect("cannot start the collision helper thread");
+        Helper {
+            shared,
+            thread: Some(thread),
+        }
+    }
+
+    fn serve(s: &Shared) {
+        let mut job = lock(&s.job);
+        loop {
+            match job.state {
+                JobState::Quit => return,
+                JobState::Run => {
+                    let (cells, p) = (job.cells.clone(), job.params.expect("params of a job"));
+                    let mut out = std::mem::take(&mut job.contacts);
+                    drop(job);
+                    out.clear();
+                    let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+                        read(&s.broad).search(cells, &p, p.epsilon * p.epsilon, &mut out)
+                    }));
+                    job = lock(&s.job);
+                    job.contacts = out;
+                    match result {
+                        Ok(stats) => {
+                            job.stats = stats;
+                            job.state = JobState::Done;
+                        }
+                        Err(_) => job.state = JobState::Failed,
+                    }
+                    s.wake.notify_all();
+                }
+                _ => job = s.wake.wait(job).unwrap_or_else(|e| e.into_inner()),
+            }
+        }
+    }
+
+    fn start(&self, cells: Range<usize>, p: ContactParams) {
+        let mut job = lock(&self.shared.job);
+        job.cells = cells;
+        job.params = Some(p);
+        job.state = JobState::Run;
+        drop(job);
+        self.shared.wake.notify_all();
+    }
+
+    /// Waits for the job and returns it (its contacts stay in the helper's buffer).
+    fn wait(&self) -> std::sync::MutexGuard<'_, Job> {
+        let mut job = lock(&self.shared.job);
+        while job.state == JobState::Run {
+            job = self
+                .shared
+                .wake
+                .wait(job)
+                .unwrap_or_else(|e| e.into_inner());
+        }
+        assert!(
+            job.state == JobState::Done,
+            "the collision helper thread panicked"
+        );
+        job.state = JobState::Idle;
+        job
+    }
+
+    fn stop(mut self) {
+        lock(&self.shared.job).state = JobState::Quit;
+        self.shared.wake.notify_all();
+        if let Some(t) = self.thread.take() {
+            let _ = t.join();
+        }
+    }
+}
+
+// The locks only guard plain buffers: a panic elsewhere leaves them consistent enough to reuse
+// (they are cleared before every use), so poisoning is ignored.
+fn lock<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
+    m.lock().unwrap_or_else(|e| e.into_inner())
+}
+
+fn read<T>(l: &RwLock<T>) -> std::sync::RwLockReadGuard<'_, T> {
+    l.read().unwrap_or_else(|e| e.into_inner())
+}
+
+fn write<T>(l: &RwLock<T>) -> std::sync::RwLockWriteGuard<'_, T> {
+    l.write().unwrap_or_else(|e| e.into_inner())
+}
+
 /// Reference all-pairs version of [`HairCollider::accumulate`], O(n²): same pair filters and
 /// response, pairs visited in lexicographic order. For tests and benchmarks.
 pub fn accumulate_brute_force(
@@ -434,25 +742,32 @@ pub fn accumulate_brute_force(
 ) -> PairStats {
     let mut stats = PairStats::default();
     let n = segs.len();
+    let boxes: Vec<SegBox> = (0..n).map(|i| SegBox::new(segs, pos, i)).collect();
     let pre: Vec<SegPre> = (0..n).map(|i| SegPre::new(segs, pos, vel, i)).collect();
     let eps2 = p.epsilon * p.epsilon;
+    let (mut node_mass, mut load) = (Vec::new(), Vec::new());
+    let mut response = Response::new(segs, force.len(), &mut node_mass, &mut load);
     let mut contacts = Vec::new();
     for a in 0..n {
         for b in a + 1..n {
             stats.candidates += 1;
-            if pair_filter(&pre[a], &pre[b], eps2) {
+            if near(&boxes[a], &boxes[b]) && moving(&pre[a], &pre[b], eps2) {
                 stats.tested += 1;
-                contacts.extend(contact(&pre[a], &pre[b], p));
+                if let Some(c) = contact(&pre[a], &pre[b], p) {
+                    response.record(&c, segs);
+                    contacts.push(c);
+                }
             }
         }
     }
     stats.in_contact = contacts.len() as u32;
-    apply_contacts(&contacts, segs, p, &mut Vec::new(), &mut Vec::new(), force);
+    response.apply(&[&contacts], segs, p, force);
     stats
 }
 
 /// Adds the contacts' forces to the nodes (eq. 3), limited so that a node touching many
-/// segments at once stays stable.
+/// segments at once stays stable. (For callers holding a list of contacts; the collider itself
+/// accumulates the loads while it finds the contacts.)
 ///
 /// The AWT's `α·dt < 1` keeps ONE contact from reversing a relative velocity, but a node in a
 /// dense wisp touches dozens of segments in the same step and the explicit sum of their
@@ -460,7 +775,8 @@ pub fn accumulate_brute_force(
 /// over its contacts is therefore computed first, and a pair's friction is scaled by
 /// `1 / max(1, 2·α·dt·W)` and its repulsion by `1 / max(1, 2·k_r·dt²·W)`, W the largest load
 /// among the pair's four nodes. The scale is the same on both sides, so forces still sum to
-/// zero; a lone contact (W ≤ 1) is untouched when `α·dt < 1/2`.
+/// zero; a lone contact (W ≤ 1) is untouched when `α·dt < 1/2`. Here `m` is the pair's mass
+/// (the lighter child).
 pub fn apply_contacts(
     contacts: &[Contact],
     segs: &SegmentsView,
@@ -469,67 +785,160 @@ pub fn apply_contacts(
     load: &mut Vec<f64>,
     force: &mut [Vector3<f64>],
 ) {
-    let nodes = force.len();
-    // A slot's mass is its mass as a child; a slot that is never a child is a kinematic root,
-    // which no force moves (infinite mass, no load).
-    node_mass.clear();
-    node_mass.resize(nodes, f64::INFINITY);
-    for i in 0..segs.len() {
-        node_mass[segs.child[i] as usize] = segs.child_mass[i];
-    }
-    load.clear();
-    load.resize(nodes, 0.0);
+    let mut response = Response::new(segs, force.len(), node_mass, load);
     for c in contacts {
+        response.record(c, segs);
+    }
+    response.apply(&[contacts], segs, p, force);
+}
+
+/// The per-node loads of [`apply_contacts`], accumulated contact by contact.
+struct Response<'a> {
+    /// Per slot: 1 / its mass as a child (0 for a kinematic root); then, in [`Self::apply`],
+    /// the friction scale of the node.
+    inv_mass: &'a mut Vec<f64>,
+    /// Per slot: the load `W`; then, in [`Self::apply`], the repulsion scale of the node.
+    load: &'a mut Vec<f64>,
+}
+
+impl<'a> Response<'a> {
+    fn new(
+        segs: &SegmentsView,
+        nodes: usize,
+        inv_mass: &'a mut Vec<f64>,
+        load: &'a mut Vec<f64>,
+    ) -> Self {
+        // A slot's mass is its mass as a child; a slot that is never a child is a kinematic
+        // root, which no force moves (infinite mass, no load).
+        inv_mass.clear();
+        inv_mass.resize(nodes, 0.0);
+        for i in 0..segs.len() {
+            inv_mass[segs.child[i] as usize] = 1.0 / segs.child_mass[i];
+        }
+        load.clear();
+        load.resize(nodes, 0.0);
+        Response { inv_mass, load }
+    }
+
+    /// Adds a contact's shares to the loads of its four nodes.
+    #[inline]
+    fn record(&mut self, c: &Contact, segs: &SegmentsView) {
         let (a, b) = (c.a as usize, c.b as usize);
+        let m = segs.child_mass[a].min(segs.child_mass[b]);
         for (n, share) in [
             (segs.parent[a], 1.0 - c.s),
             (segs.child[a], c.s),
             (segs.parent[b], 1.0 - c.t),
             (segs.child[b], c.t),
         ] {
-            load[n as usize] += share * c.mass / node_mass[n as usize];
+            self.load[n as usize] += share * m * self.inv_mass[n as usize];
         }
     }
-    for c in contacts {
-        let (a, b) = (c.a as usize, c.b as usize);
-        let (pa, ca) = (segs.parent[a] as usize, segs.child[a] as usize);
-        let (pb, cb) = (segs.parent[b] as usize, segs.child[b] as usize);
-        let w = load[pa].max(load[ca]).max(load[pb]).max(load[cb]);
-        let fric = 1.0 / (2.0 * p.friction * p.dt * w).max(1.0);
-        let rep = 1.0 / (2.0 * p.repulsion * p.dt * p.dt * w).max(1.0);
-        let f = c.friction * fric + c.repulsion * rep;
-        // Eq. 3: F at P = (1 − s)·N_p + s·N_c goes (1 − s)·F to the parent, s·F to the child.
-        let fa_child = f * c.s;
-        force[pa] += f - fa_child;
-        force[ca] += fa_child;
-        let fb_child = f * c.t;
-        force[pb] -= f - fb_child;
-        force[cb] -= fb_child;
+
+    /// Scales each contact by the loads of its nodes and adds its forces (eq. 3).
+    ///
+    /// `1 / max(1, k·W)` with `W` the largest of the four loads is the smallest of the four
+    /// nodes' `1 / max(1, k·W_n)` (the map is decreasing), so the scales are computed once per
+    /// node instead of twice per contact.
+    fn apply(
+        self,
+        lists: &[&[Contact]],
+        segs: &SegmentsView,
+        p: &ContactParams,
+        force: &mut [Vector3<f64>],
+    ) {
+        let (kf, kr) = (2.0 * p.friction * p.dt, 2.0 * p.repulsion * p.dt * p.dt);
+        let (fric, rep) = (&mut self.inv_mass[..], &mut self.load[..]);
+        for (f, w) in fric.iter_mut().zip(rep.iter_mut()) {
+            *f = 1.0 / (kf * *w).max(1.0);
+            *w = 1.0 / (kr * *w).max(1.0);
+        }
+        for c in lists.iter().flat_map(|l| l.iter()) {
+            let (a, b) = (c.a as usize, c.b as usize);
+            let (pa, ca) = (segs.parent[a] as usize, segs.child[a] as usize);
+            let (pb, cb) = (segs.parent[b] as usize, segs.child[b] as usize);
+            let fs = fric[pa].min(fric[ca]).min(fric[pb]).min(fric[cb]);
+            let rs = rep[pa].min(rep[ca]).min(rep[pb]).min(rep[cb]);
+            let f = widen(c.friction) * fs + widen(c.repulsion) * rs;
+            // Eq. 3: F at P = (1 − s)·N_p + s·N_c goes (1 − s)·F to the parent, s·F to the
+            // child.
+            let fa_child = f * c.s;
+            force[pa] += f - fa_child;
+            force[ca] += fa_child;
+            let fb_child = f * c.t;
+            force[pb] -= f - fb_child;
+            force[cb] -= fb_child;
+        }
     }
 }
 
-/// The broad phase's box of segment `i`: the box of its nodes inflated by its radius, grown by a
-/// relative 1e-12 so that rounding can never put two segments that [`pair_filter`] keeps into
-/// disjoint cell ranges (cell coordinates are monotonic in the position).
 #[inline]
-fn broad_box(segs: &SegmentsView, pos: &[Vector3<f64>], i: usize) -> (Vector3<f64>, Vector3<f64>) {
-    let a = pos[segs.parent[i] as usize];
-    let b = pos[segs.child[i] as usize];
-    let (lo, hi) = (a.inf(&b), a.sup(&b));
-    let r = segs.radius[i];
-    let m = Vector3::repeat(r + 1e-12 * (r + lo.abs().max().max(hi.abs().max())));
-    (lo - m, hi + m)
+fn widen(v: [f32; 3]) -> Vector3<f64> {
+    Vector3::new(v[0] as f64, v[1] as f64, v[2] as f64)
 }
 
-/// One segment's data for the pair tests, gathered once per step.
-#[derive(Clone, Copy)]
-struct SegPre {
-    /// Box of the two nodes, not inflated.
-    lo: [f64; 3],
-    hi: [f64; 3],
-    radius: f64,
+#[inline]
+fn narrow(v: &Vector3<f64>) -> [f32; 3] {
+    [v.x as f32, v.y as f32, v.z as f32]
+}
+
+/// One segment's broad-phase data: the box of its nodes inflated by its radius, in f32 rounded
+/// outwards (so it always contains the f64 box), and its node slots for the adjacency test.
+/// Two inflated boxes overlap exactly when the plain boxes are within `r1 + r2` on every axis.
+#[derive(Clone, Copy, Default)]
+struct SegBox {
+    lo: [f32; 3],
+    hi: [f32; 3],
     parent: u32,
     child: u32,
+}
+
+impl SegBox {
+    #[inline]
+    fn new(segs: &SegmentsView, pos: &[Vector3<f64>], i: usize) -> Self {
+        let (parent, child) = (segs.parent[i], segs.child[i]);
+        let (xp, xc) = (pos[parent as usize], pos[child as usize]);
+        let r = segs.radius[i];
+        let (lo, hi) = (xp.inf(&xc).add_scalar(-r), xp.sup(&xc).add_scalar(r));
+        SegBox {
+            lo: [0, 1, 2].map(|k| (lo[k] as f32).next_down()),
+            hi: [0, 1, 2].map(|k| (hi[k] as f32).next_up()),
+            parent,
+            child,
+        }
+    }
+
+    fn bounds(&self) -> (Vector3<f64>, Vector3<f64>) {
+        (
+            Vector3::from(self.lo.map(f64::from)),
+            Vector3::from(self.hi.map(f64::from)),
+        )
+    }
+}
+
+/// Whether a pair may touch: inflated boxes overlapping on every axis, and not adjacent.
+#[inline(always)]
+fn near(a: &SegBox, b: &SegBox) -> bool {
+    // Non-short-circuit `|`: the six comparisons are independent, one branch instead of six.
+    let apart = (a.lo[0] > b.hi[0])
+        | (b.lo[0] > a.hi[0])
+        | (a.lo[1] > b.hi[1])
+        | (b.lo[1] > a.hi[1])
+        | (a.lo[2] > b.hi[2])
+        | (b.lo[2] > a.hi[2]);
+    // Adjacent segments (a chain, or siblings on one parent) always touch: never test them.
+    let adjacent = (a.parent == b.parent)
+        | (a.parent == b.child)
+        | (a.child == b.parent)
+        | (a.child == b.child);
+    !(apart | adjacent)
+}
+
+/// One segment's data for the relative-motion test and the closest points, gathered once per
+/// step.
+#[derive(Clone, Copy)]
+struct SegPre {
+    radius: f64,
     /// Index in the [`SegmentsView`].
     seg: u32,
     xp: Vector3<f64>,
@@ -545,60 +954,37 @@ struct SegPre {
 impl SegPre {
     #[inline]
     fn new(segs: &SegmentsView, pos: &[Vector3<f64>], vel: &[Vector3<f64>], i: usize) -> Self {
-        let (parent, child) = (segs.parent[i], segs.child[i]);
-        let (xp, xc) = (pos[parent as usize], pos[child as usize]);
-        let (lo, hi) = (xp.inf(&xc), xp.sup(&xc));
+        let (parent, child) = (segs.parent[i] as usize, segs.child[i] as usize);
+        let (xp, xc) = (pos[parent], pos[child]);
         let d = xc - xp;
         SegPre {
-            lo: [lo.x, lo.y, lo.z],
-            hi: [hi.x, hi.y, hi.z],
             radius: segs.radius[i],
-            parent,
-            child,
             seg: i as u32,
             xp,
             xc,
             d,
             len2: d.norm_squared(),
-            vp: vel[parent as usize],
-            vc: vel[child as usize],
+            vp: vel[parent],
+            vc: vel[child],
             mass: segs.child_mass[i],
         }
     }
 }
 
-/// Whether a pair reaches the closest-point routine: boxes inflated by `r1 + r2` overlapping on
-/// every axis (cylinders closer than `r1 + r2` must), not adjacent, moving relative to each other.
+/// Whether the two segments move relative to each other: a bound on every point-to-point
+/// relative speed (see the module docs) at or above `epsilon`.
 #[inline(always)]
-fn pair_filter(a: &SegPre, b: &SegPre, eps2: f64) -> bool {
-    let r = a.radius + b.radius;
-    // Non-short-circuit `|`: the six comparisons are independent, one branch instead of six.
-    let apart = (a.lo[0] - b.hi[0] > r)
-        | (b.lo[0] - a.hi[0] > r)
-        | (a.lo[1] - b.hi[1] > r)
-        | (b.lo[1] - a.hi[1] > r)
-        | (a.lo[2] - b.hi[2] > r)
-        | (b.lo[2] - a.hi[2] > r);
-    if apart {
-        return false;
-    }
-    // Adjacent segments (a chain, or siblings on one parent) always touch: never test them.
-    if (a.parent == b.parent) | (a.parent == b.child) | (a.child == b.parent) | (a.child == b.child)
-    {
-        return false;
-    }
-    // Bound on every point-to-point relative speed (see module docs).
-    let rel2 = (a.vp - b.vp)
-        .norm_squared()
-        .max((a.vp - b.vc).norm_squared())
-        .max((a.vc - b.vp).norm_squared())
-        .max((a.vc - b.vc).norm_squared());
-    rel2 >= eps2
+fn moving(a: &SegPre, b: &SegPre, eps2: f64) -> bool {
+    // max(…) ≥ ε² as four independent comparisons (`f64::max` branches on NaN).
+    ((a.vp - b.vp).norm_squared() >= eps2)
+        | ((a.vp - b.vc).norm_squared() >= eps2)
+        | ((a.vc - b.vp).norm_squared() >= eps2)
+        | ((a.vc - b.vc).norm_squared() >= eps2)
 }
 
-/// The contact of a pair that passed [`pair_filter`], if the cylinders intersect. `a` must be the
-/// segment with the lower index, so that the grid and the reference compute bit-identical pair
-/// forces.
+/// The contact of a pair that passed [`near`] and [`moving`], if the cylinders intersect. `a`
+/// must be the segment with the lower index, so that the grid and the reference compute
+/// bit-identical pair forces.
 #[inline]
 fn contact(a: &SegPre, b: &SegPre, p: &ContactParams) -> Option<Contact> {
     let (xpa, xca, xpb, xcb) = (a.xp, a.xc, b.xp, b.xc);
@@ -622,13 +1008,17 @@ fn contact(a: &SegPre, b: &SegPre, p: &ContactParams) -> Option<Contact> {
     let mut repulsion = Vector3::zeros();
 
     // Eq. 2: repulsion only between wisps crossing at a large enough angle.
+    // |cos| < threshold, compared squared (no root or division on the common parallel pair);
+    // a zero-length segment counts as parallel (|cos| = 1).
     let len2 = a.len2 * b.len2;
-    let cos = if len2 > 0.0 {
-        d1.dot(&d2).abs() / len2.sqrt()
+    let dot = d1.dot(&d2);
+    let thr = p.cos_angle_threshold;
+    let crossing = if len2 > 0.0 {
+        dot * dot < thr * thr * len2
     } else {
-        1.0
+        1.0 < thr
     };
-    if cos < p.cos_angle_threshold {
+    if crossing {
         let d = dist2.sqrt();
         let n = if d > 1e-9 * r {
             delta / d
@@ -653,9 +1043,8 @@ fn contact(a: &SegPre, b: &SegPre, p: &ContactParams) -> Option<Contact> {
         b: b.seg,
         s,
         t,
-        friction,
-        repulsion,
-        mass: m,
+        friction: narrow(&friction),
+        repulsion: narrow(&repulsion),
     })
 }
 

@@ -30,6 +30,15 @@ use crate::style::{Link, SimParams};
 pub use awt::Forest;
 pub use report::{AdaptEvent, Counters, EventKind, StepReport};
 
+/// Contacts reserved per finest node (AWT runs peak at ~8 per finest node on the paper styles
+/// under `lean`; single-level runs need more and grow the list once while warming up).
+pub const CONTACTS_PER_FINEST_NODE: usize = 12;
+
+/// Threads the pair search uses by default: 2 when the machine has them.
+pub fn default_threads() -> usize {
+    std::thread::available_parallelism().map_or(1, |n| n.get().min(2))
+}
+
 /// Marks "no slot" (a root's parent).
 pub const NO_SLOT: u32 = u32::MAX;
 
@@ -172,6 +181,8 @@ impl Simulation {
         };
         let pose = motion.pose(0.0);
         let forest = Forest::new(&model, &pose, single_level);
+        let collider = Self::collider_for(&model);
+        let adapt_scratch = awt::AdaptScratch::for_model(&model);
         let mut sim = Simulation {
             model,
             motion,
@@ -185,14 +196,51 @@ impl Simulation {
             settling: false,
             pose,
             prev_pose: pose,
-            collider: collide::HairCollider::new(),
+            collider,
             spheres: Vec::new(),
             dyn_scratch: dynamics::Scratch::default(),
-            adapt_scratch: awt::AdaptScratch::default(),
+            adapt_scratch,
         };
         sim.gather();
         sim.settle();
         sim
+    }
+
+    /// A collider with every buffer reserved from the model's size (at most one active node
+    /// per finest cross-section; [`CONTACTS_PER_FINEST_NODE`] contacts per finest node), using
+    /// [`default_threads`] threads.
+    fn collider_for(model: &HairModel) -> collide::HairCollider {
+        let nodes = model.nodes_on_level(model.level_count() - 1);
+        let mut c =
+            collide::HairCollider::with_capacity(nodes, nodes, CONTACTS_PER_FINEST_NODE * nodes);
+        c.set_threads(default_threads());
+        c
+    }
+
+    /// A report with room for everything a step of this simulation writes into it, so that
+    /// even the first step with it does not allocate.
+    pub fn new_report(&self) -> StepReport {
+        let mut r = StepReport::default();
+        r.events
+            .reserve(self.model.nodes_on_level(self.model.level_count() - 1));
+        r.counters.active_per_level = vec![0; self.model.level_count()];
+        r
+    }
+
+    /// Threads of the hair–hair pair search (1 or 2). The simulation's result does not depend
+    /// on it (see [`collide::HairCollider`]).
+    pub fn set_threads(&mut self, threads: usize) {
+        self.collider.set_threads(threads);
+    }
+
+    pub fn threads(&self) -> usize {
+        self.collider.threads()
+    }
+
+    /// Bytes held by the collider's reused buffers (both threads'): constant while no buffer
+    /// grows.
+    pub fn reserved_bytes(&self) -> usize {
+        self.collider.capacity_bytes()
     }
 
     /// Lets the hair hang in the starting pose for `params.settle` seconds, then starts the
@@ -348,6 +396,10 @@ impl Simulation {
     /// Advances the simulation by one step of `params.dt`, filling `report`.
     pub fn step(&mut self, report: &mut StepReport) {
         report.events.clear();
+        // At most one event per node and step: reserved once, so a step never allocates.
+        report
+            .events
+            .reserve(self.model.nodes_on_level(self.model.level_count() - 1));
         let dt = self.params.dt;
         let t_new = self.time + dt;
         let mut times = report::StageTimes::default();
