@@ -16,7 +16,7 @@ use criterion::{criterion_group, criterion_main, BatchSize, Criterion};
 use nalgebra::{Point3, Vector3};
 use wisptree::frame::{Frame, FrameBuilder};
 use wisptree::motion::Motion;
-use wisptree::sim::collide::{self, BodySphere, ContactParams, HairCollider, SegmentsView};
+use wisptree::sim::collide::{self, BodySphere, ContactParams, HairCollider};
 use wisptree::sim::{awt, dynamics, Simulation, StepReport};
 use wisptree::style::Link;
 
@@ -110,12 +110,7 @@ fn stages(c: &mut Criterion) {
         let mut collider = HairCollider::new();
         g.bench_function(format!("{style}/interactions"), |b| {
             let s = &slots;
-            let view = SegmentsView {
-                parent: &s.seg_parent,
-                child: &s.seg_child,
-                radius: &s.seg_radius,
-                child_mass: &s.seg_mass,
-            };
+            let view = s.segs.view();
             let mut force = s.force.clone();
             b.iter(|| black_box(collider.accumulate(&view, &s.pos, &s.vel, &cp, &mut force)))
         });
@@ -143,12 +138,7 @@ fn stages(c: &mut Criterion) {
             b.iter_batched_ref(
                 || slots.clone(),
                 |s| {
-                    let view = SegmentsView {
-                        parent: &s.seg_parent,
-                        child: &s.seg_child,
-                        radius: &s.seg_radius,
-                        child_mass: &s.seg_mass,
-                    };
+                    let view = s.segs.view();
                     let n = collide::resolve_body(&view, &mut s.pos, &mut s.vel, &body, |x| {
                         pose.velocity_at(&Point3::from(*x))
                     });
@@ -194,12 +184,7 @@ fn single_level_interactions(c: &mut Criterion) {
     let sim = warmed("long.ron", true);
     let cp = contact_params(&sim);
     let s = &sim.slots;
-    let view = SegmentsView {
-        parent: &s.seg_parent,
-        child: &s.seg_child,
-        radius: &s.seg_radius,
-        child_mass: &s.seg_mass,
-    };
+    let view = s.segs.view();
     let mut force = s.force.clone();
     let mut collider = HairCollider::new();
     g.bench_function("long/single_level/interactions", |b| {

@@ -10,7 +10,7 @@ use std::time::Instant;
 
 use nalgebra::Point3;
 use wisptree::motion::Motion;
-use wisptree::sim::collide::{ContactParams, HairCollider, PairStats, SegmentsView};
+use wisptree::sim::collide::{ContactParams, HairCollider, PairStats};
 use wisptree::sim::{Simulation, StepReport};
 
 fn main() -> anyhow::Result<()> {
@@ -50,12 +50,7 @@ fn main() -> anyhow::Result<()> {
                 dt: p.dt,
             };
             let s = &sim.slots;
-            let view = SegmentsView {
-                parent: &s.seg_parent,
-                child: &s.seg_child,
-                radius: &s.seg_radius,
-                child_mass: &s.seg_mass,
-            };
+            let view = s.segs.view();
             let mut force = s.force.clone();
             let mut best = f64::MAX;
             let mut stats = PairStats::default();

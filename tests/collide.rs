@@ -36,6 +36,8 @@ struct Scene {
     child: Vec<u32>,
     radius: Vec<f64>,
     mass: Vec<f64>,
+    /// The GC of each segment: segments of one chain never collide.
+    chain: Vec<u32>,
     pos: Vec<V>,
     vel: Vec<V>,
 }
@@ -47,6 +49,7 @@ impl Scene {
             child: &self.child,
             radius: &self.radius,
             child_mass: &self.mass,
+            chain: &self.chain,
         }
     }
     /// `resolve_body` on this scene (field-wise borrows: the view and the node state are disjoint).
@@ -56,6 +59,7 @@ impl Scene {
             child: &self.child,
             radius: &self.radius,
             child_mass: &self.mass,
+            chain: &self.chain,
         };
         resolve_body(&view, &mut self.pos, &mut self.vel, sph, ov)
     }
@@ -64,11 +68,17 @@ impl Scene {
         self.vel.push(v);
         (self.pos.len() - 1) as u32
     }
+    /// A segment of its own chain.
     fn seg(&mut self, parent: u32, child: u32, radius: f64, mass: f64) {
+        let chain = self.chain.len() as u32;
+        self.chained(parent, child, radius, mass, chain);
+    }
+    fn chained(&mut self, parent: u32, child: u32, radius: f64, mass: f64, chain: u32) {
         self.parent.push(parent);
         self.child.push(child);
         self.radius.push(radius);
         self.mass.push(mass);
+        self.chain.push(chain);
     }
     /// One isolated segment with both nodes moving at `v`.
     fn lone(&mut self, a: V, b: V, v: V, radius: f64, mass: f64) {
@@ -77,11 +87,13 @@ impl Scene {
         self.seg(p, c, radius, mass);
     }
 
-    /// Random wavy strands (chains) with some branching (siblings sharing a parent), in a box of
-    /// half-size `half`, with segment length about `len`.
+    /// Random wavy strands with some branching (siblings sharing a parent), in a box of
+    /// half-size `half`, with segment length about `len`. The main line of strand `i` is chain
+    /// `i` (one GC); each sibling is a chain of its own.
     fn random(rng: &mut Rng, strands: usize, nodes: usize, half: f64, len: f64) -> Scene {
         let mut s = Scene::default();
-        for _ in 0..strands {
+        let mut next_chain = strands as u32;
+        for strand in 0..strands {
             let mut x = rng.vec(half);
             let mut dir = rng.vec(1.0).normalize();
             let mut prev = s.node(x, rng.vec(0.5));
@@ -92,12 +104,13 @@ impl Scene {
                 let c = s.node(x, v);
                 let r = rng.range(0.002, 0.01);
                 let m = rng.range(0.0005, 0.003);
-                s.seg(prev, c, r, m);
+                s.chained(prev, c, r, m, strand as u32);
                 if k % 4 == 0 {
                     // A sibling: a second child of the same parent.
                     let y = s.pos[prev as usize] + rng.vec(len);
                     let sib = s.node(y, rng.vec(0.5));
-                    s.seg(prev, sib, r, m);
+                    s.chained(prev, sib, r, m, next_chain);
+                    next_chain += 1;
                 }
                 prev = c;
             }
@@ -360,8 +373,8 @@ fn grid_matches_brute_force_and_tests_each_pair_once() {
 
         // Independent counts over the cell ranges of the grid the collider built: every pair
         // sharing a voxel is visited exactly once (candidates), and the tested pairs are those
-        // that share one, are not adjacent, move relative to each other and whose inflated
-        // boxes overlap.
+        // that share one, are not adjacent, not on one chain, move relative to each other and
+        // whose inflated boxes overlap.
         let grid = col.grid();
         let ncells = grid.dims.iter().map(|&d| d as usize).product::<usize>();
         assert!(ncells <= MAX_CELLS.min((CELLS_PER_SEGMENT * view.len()).max(64)));
@@ -388,6 +401,9 @@ fn grid_matches_brute_force_and_tests_each_pair_once() {
                 sharing += 1;
                 let nodes = [view.parent[a], view.child[a]];
                 if nodes.contains(&view.parent[b]) || nodes.contains(&view.child[b]) {
+                    continue;
+                }
+                if view.chain[a] == view.chain[b] {
                     continue;
                 }
                 let r = view.radius[a] + view.radius[b];
@@ -718,4 +734,35 @@ fn two_threads_give_bit_identical_forces() {
         shared_contacts > 500,
         "scenes too sparse: {shared_contacts}"
     );
+}
+
+/// Two segments of one GC (chain) never collide, even far from adjacent and crossing: a wisp's
+/// cylinder chain does not rub against itself. The same geometry on two chains does.
+#[test]
+fn segments_of_one_chain_never_collide() {
+    let p = params();
+    let build = |same_chain: bool| {
+        let mut s = Scene::default();
+        // A chain folded back on itself: segment 0 (x axis) and segment 2 (crossing it above,
+        // moving down into it), joined by segment 1.
+        let a = s.node(V::new(-0.1, 0.0, 0.0), V::zeros());
+        let b = s.node(V::new(0.1, 0.0, 0.0), V::zeros());
+        let c = s.node(V::new(0.0, 0.005, -0.1), V::new(0.0, -1.0, 0.0));
+        let d = s.node(V::new(0.0, 0.005, 0.1), V::new(0.0, -1.0, 0.0));
+        s.chained(a, b, 0.01, 0.001, 0);
+        s.chained(b, c, 0.01, 0.001, 0);
+        s.chained(c, d, 0.01, 0.001, if same_chain { 0 } else { 1 });
+        s
+    };
+    let (f, st) = run(&mut HairCollider::new(), &build(true), &p);
+    assert_eq!(st.tested, 0, "{st:?}");
+    assert!(f.iter().all(|x| *x == V::zeros()));
+    let folded = build(true);
+    let mut fb = vec![V::zeros(); 4];
+    let sb = accumulate_brute_force(&folded.view(), &folded.pos, &folded.vel, &p, &mut fb);
+    assert_eq!(sb.tested, 0);
+    let (g, st) = run(&mut HairCollider::new(), &build(false), &p);
+    assert_eq!(st.in_contact, 1, "{st:?}");
+    // On two chains: segment 2 is pushed up, segment 0 down.
+    assert!((g[0] + g[1]).y < 0.0 && (g[2] + g[3]).y > 0.0, "{g:?}");
 }

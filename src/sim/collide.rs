@@ -27,6 +27,12 @@
 //!   below `epsilon`. The velocity of any point of a segment is a convex combination of its node
 //!   velocities, so then every point-to-point relative velocity, in particular `Ṗ2 − Ṗ1`, is below
 //!   `epsilon` too (a midpoint test would miss segments rotating about their middles).
+//! * **A wisp does not rub against itself.** Besides adjacent segments (sharing a node, which
+//!   always touch), two segments of the same GC are never tested: they are consecutive pieces of
+//!   one wisp, and a fat coarse wisp (radius ≈ segment length) would otherwise "touch" its own
+//!   segments two and three links away at rest and damp its own bending through friction. Split
+//!   sub-wisps are other GCs and do collide with each other. (5–10 % of the contacts of the
+//!   paper styles under `lean`.)
 //! * **Degenerate normals.** When the axes intersect (`d ≈ 0`) the repulsion normal is the cross
 //!   product of the axes, oriented from the second segment's midpoint towards the first's.
 //!   A zero-length segment has no orientation and gets friction only.
@@ -42,7 +48,7 @@
 //!   cells put a fat wisp in dozens of cells and the pair visits repeated in every shared cell
 //!   grow faster than the pairs pruned (one mean length: 350 k cell-pair visits per step on
 //!   `long` for 25 k candidates); larger cells let more distant pairs through, which costs little
-//!   now that a candidate is rejected on a 32-byte [`SegBox`], but beyond ~6 lengths there are so
+//!   now that a candidate is rejected on a 36-byte [`SegBox`], but beyond ~6 lengths there are so
 //!   few cells that the search can no longer be cut into balanced halves for two threads.
 //!   Measured with `examples/interactions.rs` on the four paper styles under `lean`: 2–4 lengths within
 //!   the noise of one another. The dense array is capped at [`CELLS_PER_SEGMENT`] cells per
@@ -77,6 +83,9 @@ pub struct SegmentsView<'a> {
     pub radius: &'a [f64],
     /// Mass of the child node, kg.
     pub child_mass: &'a [f64],
+    /// The generalized cylinder (level and GC) of the child node: two segments of one chain
+    /// never collide (see the module docs).
+    pub chain: &'a [u32],
 }
 
 impl SegmentsView<'_> {
@@ -84,12 +93,17 @@ impl SegmentsView<'_> {
     pub fn len(&self) -> usize {
         let n = self.parent.len();
         assert!(
-            self.child.len() == n && self.radius.len() == n && self.child_mass.len() == n,
-            "SegmentsView slices differ in length: parent {}, child {}, radius {}, child_mass {}",
+            self.child.len() == n
+                && self.radius.len() == n
+                && self.child_mass.len() == n
+                && self.chain.len() == n,
+            "SegmentsView slices differ in length: parent {}, child {}, radius {}, child_mass {}, \
+             chain {}",
             n,
             self.child.len(),
             self.radius.len(),
-            self.child_mass.len()
+            self.child_mass.len(),
+            self.chain.len()
         );
         n
     }
@@ -246,7 +260,7 @@ impl GridInfo {
 /// ranges starts: there the two masks have no bit in common. So the "tested once" rule is one AND
 /// on data already in the cell list, without a pair set or a lookup of the ranges.
 ///
-/// Per-segment data is split by temperature: the pair loop reads only [`SegBox`] (32 bytes, the
+/// Per-segment data is split by temperature: the pair loop reads only [`SegBox`] (36 bytes, the
 /// whole scene fits in L1), and [`SegPre`] (positions, velocities, f64) only for the pairs that
 /// pass the box and adjacency tests.
 ///
@@ -891,6 +905,7 @@ struct SegBox {
     hi: [f32; 3],
     parent: u32,
     child: u32,
+    chain: u32,
 }
 
 impl SegBox {
@@ -905,6 +920,7 @@ impl SegBox {
             hi: [0, 1, 2].map(|k| (hi[k] as f32).next_up()),
             parent,
             child,
+            chain: segs.chain[i],
         }
     }
 
@@ -916,7 +932,8 @@ impl SegBox {
     }
 }
 
-/// Whether a pair may touch: inflated boxes overlapping on every axis, and not adjacent.
+/// Whether a pair may touch: inflated boxes overlapping on every axis, not adjacent, not on one
+/// chain.
 #[inline(always)]
 fn near(a: &SegBox, b: &SegBox) -> bool {
     // Non-short-circuit `|`: the six comparisons are independent, one branch instead of six.
@@ -926,11 +943,13 @@ fn near(a: &SegBox, b: &SegBox) -> bool {
         | (b.lo[1] > a.hi[1])
         | (a.lo[2] > b.hi[2])
         | (b.lo[2] > a.hi[2]);
-    // Adjacent segments (a chain, or siblings on one parent) always touch: never test them.
+    // Adjacent segments (a chain, or siblings on one parent) always touch, and the segments
+    // of one GC are pieces of one wisp: never test them.
     let adjacent = (a.parent == b.parent)
         | (a.parent == b.child)
         | (a.child == b.parent)
-        | (a.child == b.child);
+        | (a.child == b.child)
+        | (a.chain == b.chain);
     !(apart | adjacent)
 }
 

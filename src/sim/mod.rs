@@ -68,11 +68,57 @@ pub struct Slots {
     /// Scratch: positions before the body stage, and which nodes the body touched this step.
     pub pre_body: Vec<Vector3<f64>>,
     pub contact: Vec<bool>,
-    /// Segments (non-root slots) for the collider: parent slot, child slot, radius, mass.
-    pub seg_parent: Vec<u32>,
-    pub seg_child: Vec<u32>,
-    pub seg_radius: Vec<f64>,
-    pub seg_mass: Vec<f64>,
+    /// Segments (non-root slots) for the collider.
+    pub segs: Segments,
+}
+
+/// The active segments (one per non-root slot, in slot order), as the collider sees them.
+#[derive(Debug, Default, Clone)]
+pub struct Segments {
+    /// Parent and child slot.
+    pub parent: Vec<u32>,
+    pub child: Vec<u32>,
+    /// The child's radius (AWT §4.1) and mass.
+    pub radius: Vec<f64>,
+    pub mass: Vec<f64>,
+    /// The generalized cylinder `(level, GC)` of the child node, numbered over all levels.
+    pub chain: Vec<u32>,
+}
+
+impl Segments {
+    pub fn view(&self) -> collide::SegmentsView<'_> {
+        collide::SegmentsView {
+            parent: &self.parent,
+            child: &self.child,
+            radius: &self.radius,
+            child_mass: &self.mass,
+            chain: &self.chain,
+        }
+    }
+
+    pub fn len(&self) -> usize {
+        self.child.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.child.is_empty()
+    }
+
+    fn reserve(&mut self, n: usize) {
+        self.parent.reserve(n);
+        self.child.reserve(n);
+        self.radius.reserve(n);
+        self.mass.reserve(n);
+        self.chain.reserve(n);
+    }
+
+    fn clear(&mut self) {
+        self.parent.clear();
+        self.child.clear();
+        self.radius.clear();
+        self.mass.clear();
+        self.chain.clear();
+    }
 }
 
 impl Slots {
@@ -95,10 +141,7 @@ impl Slots {
         self.rest_len.reserve(n);
         self.pre_body.reserve(n);
         self.contact.reserve(n);
-        self.seg_parent.reserve(n);
-        self.seg_child.reserve(n);
-        self.seg_radius.reserve(n);
-        self.seg_mass.reserve(n);
+        self.segs.reserve(n);
     }
 
     pub fn len(&self) -> usize {
@@ -125,10 +168,7 @@ impl Slots {
         self.rest_len.clear();
         self.pre_body.clear();
         self.contact.clear();
-        self.seg_parent.clear();
-        self.seg_child.clear();
-        self.seg_radius.clear();
-        self.seg_mass.clear();
+        self.segs.clear();
     }
 }
 
@@ -360,10 +400,12 @@ impl Simulation {
     fn refresh_slot_constants(&mut self) {
         let m = &*self.model;
         let s = &mut self.slots;
-        s.seg_parent.clear();
-        s.seg_child.clear();
-        s.seg_radius.clear();
-        s.seg_mass.clear();
+        s.segs.clear();
+        // First GC number of each level, for the segments' chain ids.
+        let mut first_gc = [0u32; 256];
+        for l in 1..m.level_count() {
+            first_gc[l] = first_gc[l - 1] + m.levels[l - 1].gc_count() as u32;
+        }
         for c in 0..s.len() {
             let p = s.parent[c];
             if p == NO_SLOT {
@@ -373,10 +415,12 @@ impl Simulation {
             let rp = m.levels[s.level[p as usize] as usize].rest_pos[s.node[p as usize] as usize];
             s.rest_vec[c] = rc - rp;
             s.rest_len[c] = (rc - rp).norm();
-            s.seg_parent.push(p);
-            s.seg_child.push(c as u32);
-            s.seg_radius.push(s.radius[c]);
-            s.seg_mass.push(s.mass[c]);
+            let level = s.level[c] as usize;
+            s.segs.parent.push(p);
+            s.segs.child.push(c as u32);
+            s.segs.radius.push(s.radius[c]);
+            s.segs.mass.push(s.mass[c]);
+            s.segs.chain.push(first_gc[level] + s.node[c] / m.k as u32);
         }
     }
 
@@ -432,12 +476,7 @@ impl Simulation {
         let clock = Instant::now();
         let stats = if self.params.friction > 0.0 || self.params.repulsion > 0.0 {
             let s = &mut self.slots;
-            let view = collide::SegmentsView {
-                parent: &s.seg_parent,
-                child: &s.seg_child,
-                radius: &s.seg_radius,
-                child_mass: &s.seg_mass,
-            };
+            let view = s.segs.view();
             let cp = collide::ContactParams {
                 friction: self.params.friction,
                 repulsion: self.params.repulsion,
@@ -474,12 +513,7 @@ impl Simulation {
         let body_contacts = {
             let s = &mut self.slots;
             s.pre_body.copy_from_slice(&s.pos);
-            let view = collide::SegmentsView {
-                parent: &s.seg_parent,
-                child: &s.seg_child,
-                radius: &s.seg_radius,
-                child_mass: &s.seg_mass,
-            };
+            let view = s.segs.view();
             collide::resolve_body(&view, &mut s.pos, &mut s.vel, &self.spheres, |x| {
                 pose.velocity_at(&Point3::from(*x))
             })
@@ -535,12 +569,7 @@ impl Simulation {
                     dynamics::restore_lengths_outside(&mut self.slots, &self.spheres, &self.pose);
                 } else {
                     let s = &mut self.slots;
-                    let view = collide::SegmentsView {
-                        parent: &s.seg_parent,
-                        child: &s.seg_child,
-                        radius: &s.seg_radius,
-                        child_mass: &s.seg_mass,
-                    };
+                    let view = s.segs.view();
                     let pose = &self.pose;
                     collide::resolve_body(&view, &mut s.pos, &mut s.vel, &self.spheres, |x| {
                         pose.velocity_at(&Point3::from(*x))
@@ -561,7 +590,7 @@ impl Simulation {
                 ke += 0.5 * self.slots.mass[slot] * self.slots.vel[slot].norm_squared();
             }
         }
-        c.segments = self.slots.seg_child.len() as u32;
+        c.segments = self.slots.segs.len() as u32;
         c.pairs_tested = stats.tested;
         c.pairs_in_contact = stats.in_contact;
         c.body_contacts = body_contacts;
