@@ -635,16 +635,20 @@ pub fn print_report(r: &BenchReport) {
 
 /// `wisptree bench`.
 pub fn run(args: BenchArgs) -> anyhow::Result<()> {
+    use crate::cli::BadInput;
     let seconds = match args.seconds {
         Some(s) if !(s.is_finite() && s > 0.0 && s <= 3600.0) => {
-            anyhow::bail!("--seconds must be a positive number of seconds up to 3600, got {s}")
+            return Err(BadInput(format!(
+                "--seconds must be a positive number of seconds up to 3600, got {s}"
+            ))
+            .into());
         }
         Some(s) => s,
         None if args.quick => 0.5,
         None => 10.0,
     };
     if args.models.is_empty() {
-        anyhow::bail!("--models lists no model");
+        return Err(BadInput("--models lists no model".into()).into());
     }
     let styles = args.styles.clone().unwrap_or_else(default_styles_dir);
     let paths: Vec<(String, PathBuf)> = args
@@ -654,20 +658,22 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
         .collect();
     for (name, p) in &paths {
         if !p.is_file() {
-            anyhow::bail!(
+            return Err(BadInput(format!(
                 "--models: no style file for `{name}` at {} (known: {}; or give a path to a .ron)",
                 p.display(),
                 PAPER_MODELS.join(", ")
-            );
+            ))
+            .into());
         }
     }
     let pipeline_path = style_path(&styles, "long_curly");
     let pipeline = !args.no_pipeline;
     if pipeline && !pipeline_path.is_file() {
-        anyhow::bail!(
+        return Err(BadInput(format!(
             "the pipeline timing needs {} (or pass --no-pipeline)",
             pipeline_path.display()
-        );
+        ))
+        .into());
     }
 
     // Progress in steps, assuming the paper's 10 ms step (only the bar's length depends on it).

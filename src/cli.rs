@@ -47,6 +47,11 @@ pub struct InspectArgs {
     pub json: bool,
 }
 
+/// A user's mistake outside a style or motion file (a flag's value, a missing path): exit 2.
+#[derive(Debug, thiserror::Error)]
+#[error("{0}")]
+pub struct BadInput(pub String);
+
 /// Runs the command line; returns the process exit code.
 pub fn main() -> i32 {
     let cli = Cli::parse();
@@ -63,6 +68,7 @@ pub fn main() -> i32 {
             match e.downcast_ref::<style::StyleError>() {
                 Some(_) => EXIT_BAD_INPUT,
                 None if e.downcast_ref::<crate::motion::MotionError>().is_some() => EXIT_BAD_INPUT,
+                None if e.downcast_ref::<BadInput>().is_some() => EXIT_BAD_INPUT,
                 None => 1,
             }
         }

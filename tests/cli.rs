@@ -236,3 +236,48 @@ fn a_wrong_flag_exits_2() {
     assert_eq!(code, 2);
     assert!(err.contains("--jsn"));
 }
+
+/// `wisptree bench` end to end on a small style: the table prints, and the JSON has the
+/// fields the issue names, with a ratio that is single-level / AWT.
+#[test]
+fn bench_writes_the_table_and_json() {
+    let dir = tempfile::tempdir().unwrap();
+    let style = write(dir.path(), "small.ron", &good_style());
+    let json = dir.path().join("bench.json");
+    let (code, out, err) = wisptree(&[
+        "bench",
+        "--models",
+        &style,
+        "--seconds",
+        "0.2",
+        "--no-pipeline",
+        "--json",
+        json.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{out}\n{err}");
+    assert!(out.contains("single ms") && out.contains("paper"), "{out}");
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).expect("valid JSON");
+    assert!(v["machine"].as_str().is_some_and(|m| !m.is_empty()));
+    assert!(v["pipeline_wall_s_per_sim_s"].is_null());
+    let m = &v["models"][0];
+    assert_eq!(m["model"], "small");
+    assert_eq!(m["levels"], 2);
+    assert!(m["finest_nodes"].as_u64().unwrap() > 0);
+    let (single, awt) = (
+        m["single_level_ms_per_step"].as_f64().unwrap(),
+        m["awt_ms_per_step"].as_f64().unwrap(),
+    );
+    assert!(single > 0.0 && awt > 0.0);
+    assert!((m["ratio"].as_f64().unwrap() - single / awt).abs() < 1e-9 * single / awt);
+    for key in ["mean_active_nodes", "splits", "merges"] {
+        assert!(m[key].is_number(), "{key} missing: {m}");
+    }
+}
+
+#[test]
+fn bench_with_a_missing_model_exits_2() {
+    let (code, _, err) = wisptree(&["bench", "--models", "no/such/style.ron", "--quick"]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("no/such/style.ron"), "{err}");
+}
