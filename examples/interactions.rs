@@ -62,7 +62,11 @@ fn main() -> anyhow::Result<()> {
                 best = best.min(t.elapsed().as_secs_f64() * 1e3 / 5.0);
             }
             if verbose {
-                println!("  {style} t {:.1} s: {stats:?} {best:.3} ms", sim.time());
+                println!(
+                    "  {style} t {:.1} s: {stats:?} {best:.3} ms, helper found {}",
+                    sim.time(),
+                    collider.helper_contacts()
+                );
             }
             sum += best;
             states += 1;

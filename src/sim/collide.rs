@@ -493,12 +493,16 @@ impl Broad {
         stats
     }
 
-    /// The cell at which to cut the search in two runs of about equal work (pairs visited).
+    /// The cell at which to cut the search in two runs of about equal work. A pair is tested
+    /// in the cell where one of the two ranges starts on every axis, so a cell's work is about
+    /// (segments whose range starts there) × (segments in it).
     fn balanced_split(&self) -> usize {
         let starts = &self.cell_start[..];
+        let items = &self.items[..];
         let work = |c: usize| {
-            let k = (starts[c + 1] - starts[c]) as u64;
-            k * k.saturating_sub(1) / 2
+            let cell = &items[starts[c] as usize..starts[c + 1] as usize];
+            let starting = cell.iter().filter(|&&i| i >> MASK_SHIFT == 0).count() as u64;
+            starting * cell.len() as u64
         };
         let ncells = starts.len() - 1;
         let total: u64 = (0..ncells).map(work).sum();
