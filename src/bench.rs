@@ -2,7 +2,9 @@
 //!
 //! Every model runs the `lean` motion twice for the same simulated duration, once in
 //! single-level mode (every finest node active, no adaptation) and once as an Adaptive Wisp
-//! Tree, with the same dynamics and collision code. Only `Simulation::step` is timed (wall
+//! Tree, with the same dynamics and collision code, on one core; then the AWT again with the
+//! hair–hair pair search shared with the collider's helper thread (the same result bit for bit,
+//! as `wisptree run` does on a machine with 2 cores). Only `Simulation::step` is timed (wall
 //! clock around each call); loading the style, building the model and the settling that
 //! `Simulation::from_style` does before t = 0 are excluded. Then the whole recording pipeline
 //! is timed on Long curly: `wisptree run --save` itself, end to end ([`time_run_pipeline`]),
