@@ -2,6 +2,9 @@
 //! `.rrd` decoder and checked with the real CLI when it is there), style hot-reload, stopping
 //! mid-run the way Ctrl-C does, and the binary's exit code on bad input.
 
+#[path = "common/rrd.rs"]
+mod rrd;
+
 use std::collections::BTreeMap;
 use std::io::BufReader;
 use std::path::{Path, PathBuf};
@@ -9,7 +12,8 @@ use std::time::{Duration, Instant};
 
 use rerun::external::re_log_types::LogMsg;
 use rerun::log::Chunk;
-use rerun::{ComponentIdentifier, LineStrips3D, Points3D, Scalars, TextLog, TimelineName};
+use rerun::{LineStrips3D, Points3D, Scalars, TextLog, TimelineName};
+use rrd::rows;
 use wisptree::frame::Frame;
 use wisptree::run::{self, RunArgs, Setup, SinkArgs, StopSignal};
 use wisptree::sim::report::{EventKind, StepReport};
@@ -83,23 +87,6 @@ fn decode_file(path: &Path) -> Vec<Chunk> {
     }
     assert!(!chunks.is_empty(), "{}: no data", path.display());
     chunks
-}
-
-/// `(frame, instance count)` of every row holding `component` at `path`, in frame order.
-fn rows(chunks: &[Chunk], path: &str, component: ComponentIdentifier) -> Vec<(i64, usize)> {
-    let path: rerun::EntityPath = path.into();
-    let timeline = TimelineName::from("frame");
-    let mut out = Vec::new();
-    for c in chunks.iter().filter(|c| *c.entity_path() == path) {
-        for ((t, _), span) in c
-            .iter_component_indices(timeline, component)
-            .zip(c.iter_component_offsets(component))
-        {
-            out.push((t.as_i64(), span.len));
-        }
-    }
-    out.sort();
-    out
 }
 
 /// `(frame, value)` of a scalar series.

@@ -1,14 +1,18 @@
 //! The Rerun logging side, without a viewer: synthetic frames go through `Logger` into an
 //! in-memory sink (decoded back into chunks) or a `.rrd` file (checked by the real CLI).
 
+#[path = "common/rrd.rs"]
+mod rrd;
+
 use std::collections::BTreeMap;
 
 use rerun::external::re_log_types::LogMsg;
 use rerun::log::Chunk;
 use rerun::{
     AnnotationContext, Capsules3D, ComponentIdentifier, Ellipsoids3D, LineStrips3D, Points3D,
-    Scalars, SeriesLines, TextLog, TimelineName, ViewCoordinates,
+    Scalars, SeriesLines, TextLog, ViewCoordinates,
 };
+use rrd::rows;
 use wisptree::frame::Frame;
 use wisptree::sim::report::{AdaptEvent, Counters, EventKind};
 use wisptree::stream::{self, paths, Logger, MessageLevel};
@@ -141,23 +145,6 @@ fn memory_run() -> Decoded {
     let msgs = storage.take();
     drop(logger);
     decode(msgs)
-}
-
-/// `(frame, instance count)` of every row holding `component` at `path`, in frame order.
-fn rows(chunks: &[Chunk], path: &str, component: ComponentIdentifier) -> Vec<(i64, usize)> {
-    let path: rerun::EntityPath = path.into();
-    let timeline = TimelineName::from("frame");
-    let mut out = Vec::new();
-    for c in chunks.iter().filter(|c| *c.entity_path() == path) {
-        for ((t, _), span) in c
-            .iter_component_indices(timeline, component)
-            .zip(c.iter_component_offsets(component))
-        {
-            out.push((t.as_i64(), span.len));
-        }
-    }
-    out.sort();
-    out
 }
 
 fn entity_paths(chunks: &[Chunk]) -> BTreeMap<String, usize> {
