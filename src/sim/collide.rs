@@ -274,8 +274,10 @@ impl GridInfo {
 pub struct HairCollider {
     broad: Arc<RwLock<Broad>>,
     contacts: Vec<Contact>,
+    /// Per node slot: the load, then the repulsion scale (scratch of [`Response`]).
     load: Vec<f64>,
-    node_mass: Vec<f64>,
+    /// Per node slot: 1 / mass, then the friction scale (scratch of [`Response`]).
+    inv_mass: Vec<f64>,
     threads: usize,
     helper: Option<Helper>,
     /// Contacts the helper thread found in the last call.
@@ -334,7 +336,7 @@ impl HairCollider {
             broad: Arc::new(RwLock::new(broad)),
             contacts: Vec::with_capacity(contacts),
             load: Vec::with_capacity(nodes),
-            node_mass: Vec::with_capacity(nodes),
+            inv_mass: Vec::with_capacity(nodes),
             threads: 1,
             helper: None,
             helper_contacts: 0,
@@ -376,7 +378,7 @@ impl HairCollider {
             + (b.lo.capacity() + b.hi.capacity()) * std::mem::size_of::<[u32; 3]>()
             + (b.cell_start.capacity() + b.items.capacity()) * 4
             + self.contacts.capacity() * std::mem::size_of::<Contact>()
-            + (self.load.capacity() + self.node_mass.capacity()) * 8
+            + (self.load.capacity() + self.inv_mass.capacity()) * 8
             + helper
     }
 
@@ -409,7 +411,7 @@ impl HairCollider {
         self.contacts.clear();
         let broad = read(&self.broad);
         let ncells = broad.cell_start.len() - 1;
-        let mut response = Response::new(segs, force.len(), &mut self.node_mass, &mut self.load);
+        let mut response = Response::new(segs, force.len(), &mut self.inv_mass, &mut self.load);
         self.helper_contacts = 0;
         let stats = if self.threads > 1 && n >= MIN_SEGMENTS_TO_SHARE {
             let split = broad.balanced_split();
@@ -763,8 +765,8 @@ pub fn accumulate_brute_force(
     let boxes: Vec<SegBox> = (0..n).map(|i| SegBox::new(segs, pos, i)).collect();
     let pre: Vec<SegPre> = (0..n).map(|i| SegPre::new(segs, pos, vel, i)).collect();
     let eps2 = p.epsilon * p.epsilon;
-    let (mut node_mass, mut load) = (Vec::new(), Vec::new());
-    let mut response = Response::new(segs, force.len(), &mut node_mass, &mut load);
+    let (mut inv_mass, mut load) = (Vec::new(), Vec::new());
+    let mut response = Response::new(segs, force.len(), &mut inv_mass, &mut load);
     let mut contacts = Vec::new();
     for a in 0..n {
         for b in a + 1..n {
@@ -794,16 +796,16 @@ pub fn accumulate_brute_force(
 /// `1 / max(1, 2·α·dt·W)` and its repulsion by `1 / max(1, 2·k_r·dt²·W)`, W the largest load
 /// among the pair's four nodes. The scale is the same on both sides, so forces still sum to
 /// zero; a lone contact (W ≤ 1) is untouched when `α·dt < 1/2`. Here `m` is the pair's mass
-/// (the lighter child).
+/// (the lighter child). `inv_mass` and `load` are scratch buffers (one entry per node slot).
 pub fn apply_contacts(
     contacts: &[Contact],
     segs: &SegmentsView,
     p: &ContactParams,
-    node_mass: &mut Vec<f64>,
+    inv_mass: &mut Vec<f64>,
     load: &mut Vec<f64>,
     force: &mut [Vector3<f64>],
 ) {
-    let mut response = Response::new(segs, force.len(), node_mass, load);
+    let mut response = Response::new(segs, force.len(), inv_mass, load);
     for c in contacts {
         response.record(c, segs);
     }
