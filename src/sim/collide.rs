@@ -62,13 +62,16 @@
 //!   lists are ascending), as in [`accumulate_brute_force`], so both find the same contacts with
 //!   bit-identical pair forces (only the order in which they are summed differs).
 //! * **Two threads, same forces.** The pair search (the cell loop and the closest points, ~¾ of
-//!   the stage) can be shared with one helper thread, see [`HairCollider`]; the contacts are
-//!   applied in the one-thread order, so the result is bit-identical. rayon was tried first
+//!   the stage) can be shared with one helper thread, chunk by chunk, see [`HairCollider`]; the
+//!   contacts are applied in the one-thread order, so the result is bit-identical. (A fixed
+//!   half-and-half split was tried first: on a loaded 2-core machine the caller then often
+//!   waited for a descheduled helper, and `wisptree run` took 4.5–8 s instead of ~4.) rayon was tried first
 //!   (15–30 % faster on 2 busy cores) but every call from outside its pool pushes a job on its
 //!   injector, which allocates a 1.5 kB block every 63 jobs and breaks the no-allocation
 //!   guarantee (tests/alloc.rs); a parked helper thread with its own buffers does not.
 
 use std::ops::Range;
+use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::{Arc, Condvar, Mutex, RwLock};
 
 use nalgebra::Vector3;
@@ -264,13 +267,15 @@ impl GridInfo {
 /// whole scene fits in L1), and [`SegPre`] (positions, velocities, f64) only for the pairs that
 /// pass the box and adjacency tests.
 ///
-/// **Two threads, same result.** With [`Self::set_threads`]`(2)` the cells are cut in two runs
-/// of about equal work; a helper thread (spawned once, then parked on a condition variable)
-/// searches the second while the caller searches the first. Loads and forces are then applied
-/// from the first run's contacts followed by the second's, which is exactly the order of the
-/// one-thread search, so the forces are bit-identical whatever the thread count. The helper
-/// works on buffers it keeps, so a warm step allocates nothing (rayon's injector would: see the
-/// module docs).
+/// **Two threads, same result.** With [`Self::set_threads`]`(2)` the cells are cut into
+/// [`CHUNKS`] runs of about equal work, and the caller and a helper thread (spawned once, then
+/// parked on a condition variable) claim them from an atomic counter until none is left. If the
+/// helper is slow to wake (the logging thread or another job holds the other core), the caller
+/// simply does more chunks, so sharing never costs much more than one thread. Loads and forces
+/// are then applied chunk by chunk in cell order, exactly the order of the one-thread search, so
+/// the forces are bit-identical whatever the thread count and whoever did which chunk. The
+/// helper works on buffers it keeps, so a warm step allocates nothing (rayon's injector would:
+/// see the module docs).
 pub struct HairCollider {
     broad: Arc<RwLock<Broad>>,
     contacts: Vec<Contact>,
@@ -282,6 +287,8 @@ pub struct HairCollider {
     helper: Option<Helper>,
     /// Contacts the helper thread found in the last call.
     helper_contacts: u32,
+    /// Wait for the helper to pick up each search before claiming chunks (tests).
+    helper_first: bool,
 }
 
 impl Default for HairCollider {
@@ -340,6 +347,7 @@ impl HairCollider {
             threads: 1,
             helper: None,
             helper_contacts: 0,
+            helper_first: false,
         }
     }
 
@@ -355,6 +363,14 @@ impl HairCollider {
 
     pub fn threads(&self) -> usize {
         self.threads
+    }
+
+    /// Makes every shared search wait until the helper has picked it up, so that both threads
+    /// surely take part (otherwise the caller may do all chunks when the helper is slow to
+    /// wake). For tests; the result is the same either way.
+    #[doc(hidden)]
+    pub fn set_helper_first(&mut self, on: bool) {
+        self.helper_first = on;
     }
 
     /// How many of the last call's contacts the helper thread found (0 on one thread).
@@ -414,20 +430,40 @@ impl HairCollider {
         let mut response = Response::new(segs, force.len(), &mut self.inv_mass, &mut self.load);
         self.helper_contacts = 0;
         let stats = if self.threads > 1 && n >= MIN_SEGMENTS_TO_SHARE {
-            let split = broad.balanced_split();
+            let bounds = broad.chunk_bounds();
             let helper = self
                 .helper
                 .as_ref()
                 .expect("set_threads started the helper");
-            helper.start(split..ncells, *p);
-            let mut stats = broad.search(0..split, p, eps2, &mut self.contacts);
-            let job = helper.wait();
+            helper.start(bounds, *p, self.helper_first);
+            // Claim chunks until none is left; the helper does the same, so if it is slow to
+            // wake (a busy machine) this thread simply does more of them.
+            let mut stats = PairStats::default();
+            let mut spans = [None; CHUNKS];
+            loop {
+                let k = helper.shared.next.fetch_add(1, Ordering::AcqRel);
+                if k >= CHUNKS {
+                    break;
+                }
+                let start = self.contacts.len();
+                stats.add(&broad.search(bounds[k]..bounds[k + 1], p, eps2, &mut self.contacts));
+                spans[k] = Some((start, self.contacts.len()));
+            }
+            let job = helper.finish();
             stats.add(&job.stats);
             self.helper_contacts = job.stats.in_contact;
-            for c in self.contacts.iter().chain(&job.contacts) {
+            // The contacts chunk by chunk, i.e. in cell order: the one-thread order.
+            let lists: [&[Contact]; CHUNKS] = std::array::from_fn(|k| match spans[k] {
+                Some((a, b)) => &self.contacts[a..b],
+                None => {
+                    let (a, b) = job.spans[k];
+                    &job.contacts[a..b]
+                }
+            });
+            for c in lists.iter().flat_map(|l| l.iter()) {
                 response.record(c, segs);
             }
-            response.apply(&[&self.contacts, &job.contacts], segs, p, force);
+            response.apply(&lists, segs, p, force);
             stats
         } else {
             let stats = broad.search(0..ncells, p, eps2, &mut self.contacts);
@@ -495,10 +531,11 @@ impl Broad {
         stats
     }
 
-    /// The cell at which to cut the search in two runs of about equal work. A pair is tested
-    /// in the cell where one of the two ranges starts on every axis, so a cell's work is about
-    /// (segments whose range starts there) × (segments in it).
-    fn balanced_split(&self) -> usize {
+    /// Cuts the cells into [`CHUNKS`] runs of about equal work (chunk `k` is cells
+    /// `bounds[k]..bounds[k + 1]`). A pair is tested in the cell where one of the two ranges
+    /// starts on every axis, so a cell's work is about (segments whose range starts there) ×
+    /// (segments in it).
+    fn chunk_bounds(&self) -> [usize; CHUNKS + 1] {
         let starts = &self.cell_start[..];
         let items = &self.items[..];
         let work = |c: usize| {
@@ -508,14 +545,17 @@ impl Broad {
         };
         let ncells = starts.len() - 1;
         let total: u64 = (0..ncells).map(work).sum();
-        let mut acc = 0;
+        let mut bounds = [ncells; CHUNKS + 1];
+        bounds[0] = 0;
+        let (mut acc, mut k) = (0u64, 1);
         for c in 0..ncells {
             acc += work(c);
-            if 2 * acc >= total {
-                return c + 1;
+            while k < CHUNKS && acc * CHUNKS as u64 >= total * k as u64 {
+                bounds[k] = c + 1;
+                k += 1;
             }
         }
-        ncells
+        bounds
     }
 
     /// The grid's geometry, then a counting sort of the segments into its dense cell array.
@@ -618,19 +658,28 @@ impl PairStats {
     }
 }
 
+/// Chunks of cells the pair search is cut into when shared: enough for the two threads to
+/// even out, few enough that the hand-over stays cheap.
+const CHUNKS: usize = 8;
+
 /// What the caller hands to the helper thread and gets back.
 struct Job {
     state: JobState,
-    cells: Range<usize>,
+    bounds: [usize; CHUNKS + 1],
     params: Option<ContactParams>,
+    /// The helper's contacts, and for each chunk it searched, its span in them.
     contacts: Vec<Contact>,
+    spans: [(usize, usize); CHUNKS],
     stats: PairStats,
 }
 
 #[derive(Clone, Copy, PartialEq, Eq)]
 enum JobState {
     Idle,
+    /// Posted, not yet picked up.
     Run,
+    /// The helper is claiming chunks.
+    Busy,
     Done,
     Failed,
     Quit,
@@ -640,6 +689,8 @@ struct Shared {
     broad: Arc<RwLock<Broad>>,
     job: Mutex<Job>,
     wake: Condvar,
+    /// The next chunk to claim, by either thread.
+    next: AtomicUsize,
 }
 
 /// The helper thread of [`HairCollider`].
@@ -654,12 +705,14 @@ impl Helper {
             broad,
             job: Mutex::new(Job {
                 state: JobState::Idle,
-                cells: 0..0,
+                bounds: [0; CHUNKS + 1],
                 params: None,
                 contacts: Vec::with_capacity(contacts),
+                spans: [(0, 0); CHUNKS],
                 stats: PairStats::default(),
             }),
             wake: Condvar::new(),
+            next: AtomicUsize::new(CHUNKS),
         });
         let s = shared.clone();
         let thread = std::thread::Builder::new()
@@ -678,18 +731,38 @@ impl Helper {
             match job.state {
                 JobState::Quit => return,
                 JobState::Run => {
-                    let (cells, p) = (job.cells.clone(), job.params.expect("params of a job"));
+                    // The first chunk is claimed before saying so: a caller that waits for the
+                    // pickup (`helper_first`) is then sure the helper takes part.
+                    let mut claimed = s.next.fetch_add(1, Ordering::AcqRel);
+                    job.state = JobState::Busy;
+                    s.wake.notify_all();
+                    let (bounds, p) = (job.bounds, job.params.expect("params of a job"));
                     let mut out = std::mem::take(&mut job.contacts);
                     drop(job);
                     out.clear();
                     let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-                        read(&s.broad).search(cells, &p, p.epsilon * p.epsilon, &mut out)
+                        let broad = read(&s.broad);
+                        let eps2 = p.epsilon * p.epsilon;
+                        let mut stats = PairStats::default();
+                        let mut spans = [(0, 0); CHUNKS];
+                        loop {
+                            let k = claimed;
+                            if k >= CHUNKS {
+                                break;
+                            }
+                            claimed = s.next.fetch_add(1, Ordering::AcqRel);
+                            let start = out.len();
+                            stats.add(&broad.search(bounds[k]..bounds[k + 1], &p, eps2, &mut out));
+                            spans[k] = (start, out.len());
+                        }
+                        (stats, spans)
                     }));
                     job = lock(&s.job);
                     job.contacts = out;
                     match result {
-                        Ok(stats) => {
+                        Ok((stats, spans)) => {
                             job.stats = stats;
+                            job.spans = spans;
                             job.state = JobState::Done;
                         }
                         Err(_) => job.state = JobState::Failed,
@@ -701,19 +774,35 @@ impl Helper {
         }
     }
 
-    fn start(&self, cells: Range<usize>, p: ContactParams) {
+    /// Posts a search; with `wait_for_pickup`, returns only once the helper has started on it
+    /// (so that it surely takes part: for tests).
+    fn start(&self, bounds: [usize; CHUNKS + 1], p: ContactParams, wait_for_pickup: bool) {
         let mut job = lock(&self.shared.job);
-        job.cells = cells;
+        self.shared.next.store(0, Ordering::Release);
+        job.bounds = bounds;
         job.params = Some(p);
+        job.stats = PairStats::default();
         job.state = JobState::Run;
-        drop(job);
         self.shared.wake.notify_all();
+        while wait_for_pickup && job.state == JobState::Run {
+            job = self
+                .shared
+                .wake
+                .wait(job)
+                .unwrap_or_else(|e| e.into_inner());
+        }
     }
 
-    /// Waits for the job and returns it (its contacts stay in the helper's buffer).
-    fn wait(&self) -> std::sync::MutexGuard<'_, Job> {
+    /// Once every chunk is claimed: withdraws the job if the helper never picked it up, else
+    /// waits for it to finish. Returns the job (its contacts stay in the helper's buffer).
+    fn finish(&self) -> std::sync::MutexGuard<'_, Job> {
         let mut job = lock(&self.shared.job);
-        while job.state == JobState::Run {
+        if job.state == JobState::Run {
+            job.state = JobState::Idle;
+            job.stats = PairStats::default();
+            return job;
+        }
+        while job.state == JobState::Busy {
             job = self
                 .shared
                 .wake

@@ -34,8 +34,15 @@ pub use report::{AdaptEvent, Counters, EventKind, StepReport};
 /// under `lean`; single-level runs need more and grow the list once while warming up).
 pub const CONTACTS_PER_FINEST_NODE: usize = 12;
 
-/// Threads the pair search uses by default: 2 when the machine has them.
+/// Threads the pair search uses by default: 2 when the machine has them, or what the
+/// environment variable `WISPTREE_THREADS` says (1 or 2). The results do not depend on it.
 pub fn default_threads() -> usize {
+    if let Some(t) = std::env::var("WISPTREE_THREADS")
+        .ok()
+        .and_then(|v| v.parse::<usize>().ok())
+    {
+        return t.clamp(1, 2);
+    }
     std::thread::available_parallelism().map_or(1, |n| n.get().min(2))
 }
 
