@@ -3,8 +3,8 @@
 //! Every model runs the `lean` motion twice for the same simulated duration, once in
 //! single-level mode (every finest node active, no adaptation) and once as an Adaptive Wisp
 //! Tree, with the same dynamics and collision code, on one core; then the AWT again with the
-//! hair–hair pair search shared with the collider's helper thread (the same result bit for bit,
-//! as `wisptree run` does on a machine with 2 cores). Only `Simulation::step` is timed (wall
+//! hair–hair pair search shared with the collider's helper thread (the same result bit for bit;
+//! `wisptree run` does so on machines with 3 or more cores). Only `Simulation::step` is timed (wall
 //! clock around each call); loading the style, building the model and the settling that
 //! `Simulation::from_style` does before t = 0 are excluded. Then the whole recording pipeline
 //! is timed on Long curly: `wisptree run --save` itself, end to end ([`time_run_pipeline`]),
@@ -264,6 +264,10 @@ pub struct BenchReport {
     pub pipeline_sequential: Option<PipelineResult>,
 }
 
+fn cores() -> usize {
+    std::thread::available_parallelism().map_or(1, |n| n.get())
+}
+
 /// CPU model name and logical core count, from `/proc/cpuinfo` where there is one.
 pub fn machine_description() -> String {
     let cores = std::thread::available_parallelism()
@@ -337,7 +341,7 @@ pub fn bench_model(
     // The table is on one core: single-level and AWT with the hair–hair search on one thread;
     // then AWT again with the search shared with the helper thread (same result, bit for bit).
     let mut runs = vec![(true, 1), (false, 1)];
-    if crate::sim::default_threads() > 1 {
+    if cores() > 1 {
         runs.push((false, 2));
     }
     for &(single_level, threads) in &runs {
@@ -527,7 +531,7 @@ pub fn print_report(r: &BenchReport) {
     );
     println!(
         "machine: {}; single-level and AWT on one core; `AWT 2 thr`: the hair-hair search shared \
-         with a helper thread (same result), as `wisptree run` does ({} threads)",
+         with a helper thread (same result; `wisptree run` uses {} thread(s) here)",
         r.machine, r.run_threads
     );
     println!();
@@ -680,11 +684,7 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
 
     // Progress in steps, assuming the paper's 10 ms step (only the bar's length depends on it).
     let per_run = steps_for(seconds, 0.01) as u64;
-    let runs_per_model = if crate::sim::default_threads() > 1 {
-        3
-    } else {
-        2
-    };
+    let runs_per_model = if cores() > 1 { 3 } else { 2 };
     let total =
         per_run * runs_per_model * paths.len() as u64 + if pipeline { 2 * per_run } else { 0 };
     let progress = ProgressBar::new(total);

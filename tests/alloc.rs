@@ -298,8 +298,8 @@ fn awt_step_does_not_allocate_once_warm_long_curly() {
 /// simulation is built (`Slots`, the collider's grid, cell lists and contact list, the adapt
 /// scratch) or by `Simulation::new_report` (events, per-level counts).
 ///
-/// The hair–hair search runs on two threads here (`default_threads` on a 2-core machine, forced
-/// below); the helper thread only ever pushes into its own contact list, reserved when it starts,
+/// The hair–hair search runs on two threads here (forced below); the helper thread only ever
+/// pushes into its own contact list, reserved when it starts,
 /// and this counter sees only the test thread, so the collider's reserved bytes are checked too.
 #[test]
 fn awt_step_does_not_allocate_from_the_first_step() {
