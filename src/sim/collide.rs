@@ -49,7 +49,7 @@
 //!   grow faster than the pairs pruned (one mean length: 350 k cell-pair visits per step on
 //!   `long` for 25 k candidates); larger cells let more distant pairs through, which costs little
 //!   now that a candidate is rejected on a 36-byte [`SegBox`], but beyond ~6 lengths there are so
-//!   few cells that the search can no longer be cut into balanced halves for two threads.
+//!   few cells that the search can no longer be cut into balanced chunks for two threads.
 //!   Measured with `examples/interactions.rs` on the four paper styles under `lean`: 2–4 lengths within
 //!   the noise of one another. The dense array is capped at [`CELLS_PER_SEGMENT`] cells per
 //!   segment (clearing and scanning it cost per cell) and at [`MAX_CELLS`] in all (the cell side
