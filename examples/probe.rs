@@ -46,6 +46,7 @@ fn main() -> anyhow::Result<()> {
             match e.kind {
                 EventKind::Split => splits += 1,
                 EventKind::Merge => merges += 1,
+                _ => {}
             }
         }
         if step % 25 == 0 {

@@ -167,6 +167,7 @@ pub fn time_steps(sim: &mut Simulation, steps: usize, mut after_step: impl FnMut
             match e.kind {
                 EventKind::Split => splits += 1,
                 EventKind::Merge => merges += 1,
+                _ => {}
             }
         }
         tested += u64::from(report.counters.pairs_tested);
@@ -452,6 +453,7 @@ pub fn time_pipeline(
             match e.kind {
                 EventKind::Split => frame.splits += 1,
                 EventKind::Merge => frame.merges += 1,
+                _ => {}
             }
         }
         frame.split_threshold = sim.params.split_threshold;

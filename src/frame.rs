@@ -56,6 +56,73 @@ pub struct BodyBuf {
     pub scalp_rotation: [f32; 4],
 }
 
+/// What an extra primitive set holds.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum PrimitiveKind {
+    /// Points (drawn as small spheres of `radius_ui`).
+    Points,
+    /// Line strips: strip `s` is `points[offsets[s]..offsets[s + 1]]`.
+    LineStrips,
+    /// Triangles: three consecutive points each (drawn translucent).
+    Triangles,
+}
+
+/// A named set of primitives that a solver adds beside its nodes and segments (a layered
+/// wisp's envelope, guide strands' static links and triangle strips, …). The logger draws it at
+/// `path` without knowing which solver made it.
+#[derive(Debug, Clone)]
+pub struct PrimitiveSet {
+    /// Entity path, `/hair/<solver>/<name>` (an interface: see README).
+    pub path: &'static str,
+    pub kind: PrimitiveKind,
+    pub points: Vec<[f32; 3]>,
+    /// Line strips only: `strips + 1` entries starting with 0.
+    pub offsets: Vec<u32>,
+    /// One RGBA colour per primitive (point, strip or triangle); empty: all `color`.
+    pub colors: Vec<[u8; 4]>,
+    /// The colour of every primitive when `colors` is empty.
+    pub color: [u8; 4],
+    /// Point radius or line width, in UI points (independent of zoom).
+    pub radius_ui: f32,
+}
+
+impl PrimitiveSet {
+    /// Empties the set, keeping its buffers.
+    pub fn clear(&mut self) {
+        self.points.clear();
+        self.offsets.clear();
+        self.colors.clear();
+    }
+
+    /// Number of primitives: points, strips or triangles.
+    pub fn len(&self) -> usize {
+        match self.kind {
+            PrimitiveKind::Points => self.points.len(),
+            PrimitiveKind::LineStrips => self.offsets.len().saturating_sub(1),
+            PrimitiveKind::Triangles => self.points.len() / 3,
+        }
+    }
+
+    /// No primitive.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// Appends one line strip (line strips only).
+    pub fn push_strip(&mut self, points: impl IntoIterator<Item = [f32; 3]>) {
+        if self.offsets.is_empty() {
+            self.offsets.push(0);
+        }
+        self.points.extend(points);
+        self.offsets.push(self.points.len() as u32);
+    }
+
+    /// Line strip `s`.
+    pub fn strip(&self, s: usize) -> &[[f32; 3]] {
+        &self.points[self.offsets[s] as usize..self.offsets[s + 1] as usize]
+    }
+}
+
 /// One displayed frame.
 #[derive(Debug, Clone, Default)]
 pub struct Frame {
@@ -85,6 +152,59 @@ pub struct Frame {
     pub messages: Vec<String>,
     /// Number of levels of detail of the model (for the annotation context).
     pub levels: u16,
+    /// The solver's entity path segment: nodes go to `/hair/<solver>/nodes`.
+    pub solver: &'static str,
+    /// Extra primitive sets the solver drew (see [`Frame::primitives`]).
+    pub extras: Vec<PrimitiveSet>,
+    /// Every stat of the frame as (entity path, value): the common counters, the solver's own
+    /// stats, and the pipeline's (step time, dropped frames, parameters). The logger, the bench
+    /// and the JSON all read this list.
+    pub stats: Vec<crate::sim::report::Stat>,
+}
+
+impl Frame {
+    /// The extra primitive set at `path`, created empty on first use (its buffers are kept
+    /// from frame to frame, so drawing into it allocates nothing once warm). Sets are emptied
+    /// by [`Frame::clear_primitives`] before the solver draws.
+    pub fn primitives(&mut self, path: &'static str, kind: PrimitiveKind) -> &mut PrimitiveSet {
+        let i = match self.extras.iter().position(|e| e.path == path) {
+            Some(i) => i,
+            None => {
+                self.extras.push(PrimitiveSet {
+                    path,
+                    kind,
+                    points: Vec::new(),
+                    offsets: Vec::new(),
+                    colors: Vec::new(),
+                    color: [255, 255, 255, 255],
+                    radius_ui: 1.0,
+                });
+                self.extras.len() - 1
+            }
+        };
+        let set = &mut self.extras[i];
+        set.kind = kind;
+        set
+    }
+
+    /// Empties nodes, segments and every extra set, keeping their buffers.
+    pub fn clear_primitives(&mut self) {
+        self.nodes.positions.clear();
+        self.nodes.radii.clear();
+        self.nodes.levels.clear();
+        self.segments.starts.clear();
+        self.segments.ends.clear();
+        self.segments.radii.clear();
+        self.segments.levels.clear();
+        for e in &mut self.extras {
+            e.clear();
+        }
+    }
+
+    /// The value of stat `path` this frame, if present.
+    pub fn stat(&self, path: &str) -> Option<f64> {
+        self.stats.iter().find(|s| s.path == path).map(|s| s.value)
+    }
 }
 
 /// Fills `Frame`s from a simulation. Owns the strand subset and scratch buffers, so building a
@@ -116,61 +236,45 @@ impl FrameBuilder {
         self.strands.len()
     }
 
-    /// Overwrites `f`'s geometry with the simulation's current state. Counters, events and
-    /// messages are the caller's.
-    pub fn fill(&mut self, sim: &mut crate::sim::Simulation, f: &mut Frame) {
-        use nalgebra::{Point3, Vector3};
-        sim.update_followers();
-        let to32 = |v: &Vector3<f64>| [v.x as f32, v.y as f32, v.z as f32];
-        f.sim_time = sim.time();
-        f.levels = sim.model.level_count() as u16;
-
-        let s = &sim.slots;
-        f.nodes.positions.clear();
-        f.nodes.radii.clear();
-        f.nodes.levels.clear();
-        f.segments.starts.clear();
-        f.segments.ends.clear();
-        f.segments.radii.clear();
-        f.segments.levels.clear();
-        for c in 0..s.len() {
-            f.nodes.positions.push(to32(&s.pos[c]));
-            f.nodes.radii.push(s.radius[c] as f32);
-            f.nodes.levels.push(s.level[c] as u16);
-            let p = s.parent[c];
-            if p != crate::sim::NO_SLOT {
-                f.segments.starts.push(to32(&s.pos[p as usize]));
-                f.segments.ends.push(to32(&s.pos[c]));
-                f.segments.radii.push(s.radius[c] as f32);
-                f.segments.levels.push(s.level[c] as u16);
-            }
-        }
+    /// Overwrites `f`'s geometry with the solver's current state: its primitives, the drawn
+    /// strands (smoothed) and the body. Counters, events and messages are the caller's.
+    pub fn fill(&mut self, solver: &mut dyn crate::solver::Solver, f: &mut Frame) {
+        solver.sync_display();
+        f.sim_time = solver.time();
+        f.solver = solver.kind().path_segment();
+        f.levels = solver.model().level_count() as u16;
+        f.clear_primitives();
+        solver.draw(f);
 
         f.strands.points.clear();
         f.strands.offsets.clear();
         f.strands.offsets.push(0);
         for &st in &self.strands {
             self.scratch.clear();
-            sim.strand_points(st as usize, &mut self.scratch);
+            solver.strand_points(st as usize, &mut self.scratch);
             catmull_rom(&self.scratch, self.subdivisions, &mut f.strands.points);
             f.strands.offsets.push(f.strands.points.len() as u32);
         }
-
-        let pose = sim.pose();
-        let m = &sim.model;
-        f.body.sphere_centers.clear();
-        f.body.sphere_radii.clear();
-        for sp in &m.body {
-            let c = pose.transform_point(&Point3::from(Vector3::from(sp.center)));
-            f.body.sphere_centers.push(to32(&c.coords));
-            f.body.sphere_radii.push(sp.radius as f32);
-        }
-        let c = pose.transform_point(&Point3::from(m.scalp_center));
-        f.body.scalp_center = to32(&c.coords);
-        f.body.scalp_radii = to32(&m.scalp_radii);
-        let q = pose.iso.rotation;
-        f.body.scalp_rotation = [q.i as f32, q.j as f32, q.k as f32, q.w as f32];
+        fill_body(solver.model(), solver.pose(), &mut f.body);
     }
+}
+
+/// Poses the model's body spheres and scalp into `body`.
+pub fn fill_body(m: &crate::model::HairModel, pose: &crate::motion::Pose, body: &mut BodyBuf) {
+    use nalgebra::{Point3, Vector3};
+    let to32 = |v: &Vector3<f64>| [v.x as f32, v.y as f32, v.z as f32];
+    body.sphere_centers.clear();
+    body.sphere_radii.clear();
+    for sp in &m.body {
+        let c = pose.transform_point(&Point3::from(Vector3::from(sp.center)));
+        body.sphere_centers.push(to32(&c.coords));
+        body.sphere_radii.push(sp.radius as f32);
+    }
+    let c = pose.transform_point(&Point3::from(m.scalp_center));
+    body.scalp_center = to32(&c.coords);
+    body.scalp_radii = to32(&m.scalp_radii);
+    let q = pose.iso.rotation;
+    body.scalp_rotation = [q.i as f32, q.j as f32, q.k as f32, q.w as f32];
 }
 
 /// Appends a uniform Catmull-Rom spline through `p` with `sub` points per span (the control

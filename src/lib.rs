@@ -12,11 +12,14 @@
 
 pub mod bench;
 pub mod cli;
+pub mod experiment;
 pub mod frame;
 pub mod model;
 pub mod motion;
 pub mod run;
+pub mod scene;
 pub mod sim;
+pub mod solver;
 pub mod stream;
 pub mod style;
 pub mod tune;

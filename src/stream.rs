@@ -132,6 +132,18 @@ const SEGMENT_ALPHA_FINE: f32 = 30.0;
 /// the full radius.
 const NODE_DRAW_SCALE: f32 = 0.25;
 const SPLIT_COLOR: (u8, u8, u8) = (255, 90, 20);
+const GUIDE_INSERT_COLOR: (u8, u8, u8) = (120, 255, 120);
+const GUIDE_REMOVE_COLOR: (u8, u8, u8) = (255, 120, 255);
+
+/// The marker colour of an event kind.
+fn event_color(kind: EventKind) -> (u8, u8, u8) {
+    match kind {
+        EventKind::Split => SPLIT_COLOR,
+        EventKind::Merge => MERGE_COLOR,
+        EventKind::GuideInsert => GUIDE_INSERT_COLOR,
+        EventKind::GuideRemove => GUIDE_REMOVE_COLOR,
+    }
+}
 const MERGE_COLOR: (u8, u8, u8) = (40, 200, 230);
 const BODY_COLOR: (u8, u8, u8, u8) = (170, 170, 180, 110);
 const SCALP_COLOR: (u8, u8, u8) = (225, 190, 160);
@@ -154,8 +166,8 @@ struct Paths {
     strands: EntityPath,
     body_spheres: EntityPath,
     scalp: EntityPath,
-    splits: EntityPath,
-    merges: EntityPath,
+    /// `/events/<kind>`, in [`EventKind::ALL`] order.
+    events: [EntityPath; 4],
     log: EntityPath,
     active_levels: Vec<EntityPath>,
     stat_splits: EntityPath,
@@ -178,8 +190,7 @@ impl Paths {
             strands: paths::STRANDS.into(),
             body_spheres: paths::BODY_SPHERES.into(),
             scalp: paths::SCALP.into(),
-            splits: paths::SPLITS.into(),
-            merges: paths::MERGES.into(),
+            events: EventKind::ALL.map(|k| format!("/events/{}", k.name()).into()),
             log: paths::LOG.into(),
             active_levels: (0..levels as usize)
                 .map(|l| paths::active_nodes_level(l).into())
@@ -209,8 +220,7 @@ pub struct Logger {
     event_labels: Vec<String>,
     text: String,
     /// Whether the last frame logged markers of that kind (then an eventless frame clears them).
-    splits_shown: bool,
-    merges_shown: bool,
+    events_shown: [bool; 4],
     /// Per-instance translucent level colours, reused.
     node_colors: Vec<Color>,
     seg_colors: Vec<Color>,
@@ -250,8 +260,7 @@ impl Logger {
             event_positions: Vec::new(),
             event_labels: Vec::new(),
             text: String::new(),
-            splits_shown: false,
-            merges_shown: false,
+            events_shown: [false; 4],
             node_colors: Vec::new(),
             seg_colors: Vec::new(),
         };
@@ -394,13 +403,11 @@ impl Logger {
     }
 
     fn log_events(&mut self, frame: &Frame) -> anyhow::Result<()> {
-        for kind in [EventKind::Split, EventKind::Merge] {
+        for (k, kind) in EventKind::ALL.into_iter().enumerate() {
             self.event_positions.clear();
             self.event_labels.clear();
-            let (path, color) = match kind {
-                EventKind::Split => (self.paths.splits.clone(), SPLIT_COLOR),
-                EventKind::Merge => (self.paths.merges.clone(), MERGE_COLOR),
-            };
+            let path = self.paths.events[k].clone();
+            let color = event_color(kind);
             for e in frame.events.iter().filter(|e| e.kind == kind) {
                 self.text.clear();
                 describe_event(&mut self.text, e);
@@ -414,10 +421,7 @@ impl Logger {
                 self.event_labels
                     .push(format!("L{} gc{} i{}", e.level, e.gc, e.cross_section));
             }
-            let shown = match kind {
-                EventKind::Split => &mut self.splits_shown,
-                EventKind::Merge => &mut self.merges_shown,
-            };
+            let shown = &mut self.events_shown[k];
             if !self.event_positions.is_empty() {
                 self.rec.log(
                     path,
@@ -524,10 +528,11 @@ fn log_series_styles(rec: &RecordingStream, levels: u16) -> anyhow::Result<()> {
 
 /// One line per event: what, where in the hierarchy, and the value that triggered it.
 fn describe_event(out: &mut String, e: &AdaptEvent) {
-    let what = match e.kind {
-        EventKind::Split => "split",
-        EventKind::Merge => "merge",
-    };
+    let what = e.kind.name();
+    if matches!(e.kind, EventKind::GuideInsert | EventKind::GuideRemove) {
+        let _ = write!(out, "{what}: guide {} at t={:.3} s", e.gc, e.time);
+        return;
+    }
     let _ = write!(
         out,
         "{what} tree {} level {} gc {} cross-section {} → gcs {}..{} of level {} at t={:.3} s: ",
@@ -547,6 +552,7 @@ fn describe_event(out: &mut String, e: &AdaptEvent) {
             "max relative velocity = {:.4} m/s (|a|·r = {:.4} m²/s²)",
             e.rel_velocity, e.accel_radius
         ),
+        EventKind::GuideInsert | EventKind::GuideRemove => Ok(()),
     };
 }
 

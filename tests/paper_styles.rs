@@ -196,6 +196,7 @@ fn count_events(name: &str, motion: &str, secs: f64, split: Option<f64>) -> (usi
             match e.kind {
                 wisptree::sim::EventKind::Split => splits += 1,
                 wisptree::sim::EventKind::Merge => merges += 1,
+                other => panic!("the AWT reported a {other:?} event"),
             }
         }
         active += s.active_count() as f64;

@@ -218,6 +218,7 @@ fn a_short_recording_holds_every_path_one_row_per_frame_and_the_events_of_each_f
                 match e.kind {
                     EventKind::Split => expected_splits.push((f, 1)),
                     EventKind::Merge => expected_merges.push((f, 1)),
+                    other => panic!("the AWT reported a {other:?} event"),
                 }
             }
         }

@@ -313,9 +313,9 @@ fn missing_and_empty_files() {
     let dir = tempfile::tempdir().unwrap();
     let missing = dir.path().join("nope.tfx");
     match load_tfx(&missing) {
-        Err(StyleError::Io { path, source }) => {
+        Err(StyleError::Io { path, error }) => {
             assert_eq!(path, missing);
-            assert_eq!(source.kind(), std::io::ErrorKind::NotFound);
+            assert_eq!(error.kind(), std::io::ErrorKind::NotFound);
         }
         other => panic!("expected an Io error, got {other:?}"),
     }

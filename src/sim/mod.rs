@@ -13,6 +13,7 @@
 //! gathered again only when the active set changed. Non-active nodes are not moved every step:
 //! their followed positions (§3.3) are computed when needed (a split, a merge, a display frame).
 
+mod as_solver;
 pub mod awt;
 pub mod collide;
 pub mod dynamics;

@@ -9,6 +9,59 @@ pub enum EventKind {
     Split,
     /// Sub-nodes became their super-node (AWT §3.2).
     Merge,
+    /// A guide strand was inserted between two that drifted apart (Chang, Jin, Yu 2002, §4.3).
+    GuideInsert,
+    /// An inserted guide strand was removed when its neighbours came close again (§4.3).
+    GuideRemove,
+}
+
+impl EventKind {
+    /// Every kind, in the order the logger lists them.
+    pub const ALL: [EventKind; 4] = [
+        EventKind::Split,
+        EventKind::Merge,
+        EventKind::GuideInsert,
+        EventKind::GuideRemove,
+    ];
+
+    /// The last segment of its entity path, `/events/<name>`.
+    pub fn name(self) -> &'static str {
+        match self {
+            EventKind::Split => "split",
+            EventKind::Merge => "merge",
+            EventKind::GuideInsert => "guide_insert",
+            EventKind::GuideRemove => "guide_remove",
+        }
+    }
+}
+
+/// How a stat of several steps becomes the stat of their frame.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Aggregate {
+    /// The last step's value (a state: a count of links, of guides).
+    Last,
+    /// The sum over the frame's steps (an event count: collisions, contacts).
+    Sum,
+    /// The largest step value.
+    Max,
+}
+
+/// One named number of a step or a frame: logged as a scalar at `path` (`/stats/<name>`),
+/// printed and written to JSON by the bench under its last path segment.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Stat {
+    /// The entity path, `/stats/<name>` (an interface: documented in README).
+    pub path: &'static str,
+    pub value: f64,
+    /// How the frame's value is made from its steps'.
+    pub aggregate: Aggregate,
+}
+
+impl Stat {
+    /// The last path segment (`interpenetrating_pairs` for `/stats/interpenetrating_pairs`).
+    pub fn name(&self) -> &'static str {
+        self.path.rsplit('/').next().unwrap_or(self.path)
+    }
 }
 
 /// One split or merge.
@@ -93,4 +146,24 @@ pub struct Counters {
 pub struct StepReport {
     pub events: Vec<AdaptEvent>,
     pub counters: Counters,
+    /// Stats particular to the solver (`/stats/collisions`, `/stats/links_intact`, …), beside
+    /// the common [`Counters`]. Cleared by the solver at the start of a step.
+    pub stats: Vec<Stat>,
+}
+
+impl StepReport {
+    /// Sets stat `path` of this step (added if absent; no allocation once it exists).
+    pub fn set_stat(&mut self, path: &'static str, value: f64, aggregate: Aggregate) {
+        match self.stats.iter_mut().find(|s| s.path == path) {
+            Some(s) => {
+                s.value = value;
+                s.aggregate = aggregate;
+            }
+            None => self.stats.push(Stat {
+                path,
+                value,
+                aggregate,
+            }),
+        }
+    }
 }

@@ -3,6 +3,7 @@
 //! `load` reads and validates a `.ron` file; `LoadedStyle::strands` generates (seed 004) or
 //! imports (TressFX) the strands that the multiresolution model (`crate::model`) is built from.
 
+pub mod builtin;
 pub mod generate;
 pub mod schema;
 pub mod tfx;
@@ -15,12 +16,15 @@ pub use schema::*;
 /// position where there is one, and the field.
 #[derive(Debug, thiserror::Error)]
 pub enum StyleError {
-    #[error("{path}: cannot read: {source}")]
+    /// (The I/O error is part of the message, not a `source`: an error chain printed with
+    /// `{:#}` would say it twice.)
+    #[error("{path}: cannot read: {error}")]
     Io {
         path: PathBuf,
-        #[source]
-        source: std::io::Error,
+        error: std::io::Error,
     },
+    #[error("{path}: no such file (and not a built-in style: {builtins})")]
+    Missing { path: PathBuf, builtins: String },
     #[error("{path}: the file is empty")]
     Empty { path: PathBuf },
     #[error("{path}:{line}:{col}: {msg}")]
@@ -68,9 +72,9 @@ pub struct RawHair {
 
 /// Reads, parses and validates a style file.
 pub fn load(path: &Path) -> Result<LoadedStyle, StyleError> {
-    let text = std::fs::read_to_string(path).map_err(|source| StyleError::Io {
+    let text = std::fs::read_to_string(path).map_err(|error| StyleError::Io {
         path: path.to_path_buf(),
-        source,
+        error,
     })?;
     parse(path, &text)
 }

@@ -24,9 +24,9 @@ const MAX_VERTICES: u32 = 1024;
 
 /// Reads a `.tfx` file (version 3.0 or 4.0): every strand's vertices, root first, in file units.
 pub fn load_tfx(path: &Path) -> Result<Vec<Vec<[f64; 3]>>, StyleError> {
-    let bytes = std::fs::read(path).map_err(|source| StyleError::Io {
+    let bytes = std::fs::read(path).map_err(|error| StyleError::Io {
         path: path.to_path_buf(),
-        source,
+        error,
     })?;
     parse_tfx(path, &bytes)
 }
@@ -183,9 +183,9 @@ pub fn load_project_spheres(
     scale: f64,
     translate: Vec3,
 ) -> Result<Vec<Sphere>, StyleError> {
-    let bytes = std::fs::read(path).map_err(|source| StyleError::Io {
+    let bytes = std::fs::read(path).map_err(|error| StyleError::Io {
         path: path.to_path_buf(),
-        source,
+        error,
     })?;
     let err = |msg: String| StyleError::Tfx {
         path: path.to_path_buf(),

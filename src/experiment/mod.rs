@@ -1,0 +1,85 @@
+//! The papers' experiments (`wisptree experiment NAME`): small scenes that each demonstrate one
+//! number of one paper, recorded like a run and printed as JSON.
+//!
+//! An experiment steps its own solvers (it measures things between steps, such as how often
+//! two wisps pass through each other) and hands every displayed frame to a [`FrameSink`]: the
+//! app's sink logs it to Rerun under `/runs/<label>/…`, a test's sink does nothing. Experiments
+//! never name Rerun.
+
+use crate::solver::{AdaptEvent, Solver};
+
+/// Where an experiment's frames go.
+pub trait FrameSink {
+    /// One displayed frame of run `label`: the solver after the frame's steps, and the events
+    /// of those steps. The sink may call `sync_display`, `draw` and `strand_points`.
+    fn frame(
+        &mut self,
+        label: &str,
+        solver: &mut dyn Solver,
+        events: &[AdaptEvent],
+    ) -> anyhow::Result<()>;
+}
+
+/// A sink that drops every frame (tests, `--json` without `--save`).
+pub struct NoFrames;
+
+impl FrameSink for NoFrames {
+    fn frame(&mut self, _: &str, _: &mut dyn Solver, _: &[AdaptEvent]) -> anyhow::Result<()> {
+        Ok(())
+    }
+}
+
+/// How long to run: the full experiment, or a shortened one for tests.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ExperimentOptions {
+    /// Multiplies every run's duration (1 = as designed; tests use less).
+    pub duration_scale: f64,
+}
+
+impl Default for ExperimentOptions {
+    fn default() -> Self {
+        ExperimentOptions {
+            duration_scale: 1.0,
+        }
+    }
+}
+
+/// One run of an experiment and what it measured.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct ExperimentRun {
+    /// `none`, `friction`, `collision`, … (`[A-Za-z0-9_.-]` only: it is an entity path part).
+    pub label: String,
+    /// The numbers it demonstrates, by name (`crossings`, `separation_s`, …); `null` where a
+    /// quantity did not happen (never separated).
+    #[serde(flatten)]
+    pub metrics: serde_json::Map<String, serde_json::Value>,
+}
+
+/// What `wisptree experiment NAME --json FILE` writes.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct ExperimentReport {
+    pub experiment: String,
+    pub runs: Vec<ExperimentRun>,
+}
+
+/// One registered experiment.
+pub struct ExperimentDef {
+    /// The name `wisptree experiment` takes (`plante-fig8`).
+    pub name: &'static str,
+    /// One line for `--list`: the paper, the figure, what it shows.
+    pub description: &'static str,
+    /// What the printed numbers should show (printed after them).
+    pub expectation: &'static str,
+    /// Runs every run of the experiment, sending frames to the sink.
+    pub run: fn(&ExperimentOptions, &mut dyn FrameSink) -> anyhow::Result<Vec<ExperimentRun>>,
+}
+
+/// Every experiment, in `--list` order.
+pub fn all() -> Vec<&'static ExperimentDef> {
+    Vec::new()
+}
+
+/// The experiment called `name`.
+pub fn find(name: &str) -> Option<&'static ExperimentDef> {
+    all().into_iter().find(|e| e.name == name)
+}

@@ -1,0 +1,151 @@
+//! The one scene loader: a style (built-in name or path), a motion and a model choice become a
+//! ready [`Solver`]. Every command, example, bench and test builds its simulation here.
+
+use std::sync::Arc;
+
+use nalgebra::Point3;
+
+use crate::model::HairModel;
+use crate::motion::Motion;
+use crate::solver::{Solver, SolverKind};
+use crate::style::builtin::StyleSource;
+use crate::style::{LoadedStyle, SimParams, StyleError};
+
+/// A loaded style, its model, the motion and the solver choice: everything a run is built
+/// from. Cheap to clone (the model is shared).
+#[derive(Clone)]
+pub struct Scene {
+    /// Where the style came from (a file is watched while live; a built-in name is not).
+    pub source: StyleSource,
+    pub loaded: LoadedStyle,
+    pub model: Arc<HairModel>,
+    /// The `--motion` argument, kept to rebuild the motion on a reloaded model.
+    pub motion_spec: String,
+    pub motion: Motion,
+    pub solver: SolverKind,
+}
+
+impl Scene {
+    /// Loads the style named or pointed to by `style`, builds its model and parses the motion.
+    /// The errors keep their `StyleError`/`MotionError` roots, so the command exits with code 2.
+    pub fn load(style: &str, motion: &str, solver: SolverKind) -> anyhow::Result<Scene> {
+        Self::load_source(StyleSource::parse(style), motion, solver)
+    }
+
+    /// Like [`Scene::load`], from a parsed source.
+    pub fn load_source(
+        source: StyleSource,
+        motion: &str,
+        solver: SolverKind,
+    ) -> anyhow::Result<Scene> {
+        let (loaded, model) = load_model(&source)?;
+        Self::from_model(source, loaded, model, motion, solver)
+    }
+
+    /// A scene on an already built model (a reloaded style file).
+    pub fn from_model(
+        source: StyleSource,
+        loaded: LoadedStyle,
+        model: HairModel,
+        motion: &str,
+        solver: SolverKind,
+    ) -> anyhow::Result<Scene> {
+        let motion_parsed = Motion::parse(motion, Point3::from(model.scalp_center))?;
+        Ok(Scene {
+            source,
+            loaded,
+            model: Arc::new(model),
+            motion_spec: motion.to_owned(),
+            motion: motion_parsed,
+            solver,
+        })
+    }
+
+    /// The same scene with another solver.
+    pub fn with_solver(&self, solver: SolverKind) -> Scene {
+        Scene {
+            solver,
+            ..self.clone()
+        }
+    }
+
+    /// A fresh solver with the style's own parameters.
+    pub fn solver(&self) -> Box<dyn Solver> {
+        self.solver_with(&self.loaded.style.sim)
+    }
+
+    /// A fresh solver with parameters other than the style's (a restart keeps the tuned ones).
+    pub fn solver_with(&self, params: &SimParams) -> Box<dyn Solver> {
+        match self.solver {
+            SolverKind::Awt | SolverKind::SingleLevel => Box::new(self.awt_with(params)),
+        }
+    }
+
+    /// The AWT (or its single-level mode, as [`Scene::solver`] chooses) as its concrete type,
+    /// for tests and benches that look inside it.
+    pub fn awt(&self) -> crate::sim::Simulation {
+        self.awt_with(&self.loaded.style.sim)
+    }
+
+    fn awt_with(&self, params: &SimParams) -> crate::sim::Simulation {
+        crate::sim::Simulation::with_params(
+            self.model.clone(),
+            self.motion.clone(),
+            self.solver == SolverKind::SingleLevel,
+            Some(crate::sim::Tunables {
+                params: params.clone(),
+                link: self.loaded.style.link.clone(),
+            }),
+        )
+    }
+
+    /// The display name: the style's name, else the file stem.
+    pub fn style_name(&self) -> String {
+        style_name(&self.loaded)
+    }
+
+    /// Length of one displayed frame, s.
+    pub fn frame_dt(&self) -> f64 {
+        let p = &self.loaded.style.sim;
+        p.dt * p.steps_per_frame.max(1) as f64
+    }
+
+    /// Frames of `seconds` simulated time (at least one).
+    pub fn frames_for(&self, seconds: f64) -> u64 {
+        ((seconds / self.frame_dt()).round() as u64).max(1)
+    }
+
+    /// Where the camera looks: the middle of the range the scalp centre sweeps during the first
+    /// seconds of the motion, so a motion that carries the head away (lean: 35° about the
+    /// hips, a third of a metre) stays in view instead of leaving the frame on one side.
+    pub fn camera_target(&self) -> [f32; 3] {
+        let rest = Point3::from(self.model.scalp_center);
+        let (mut lo, mut hi) = (rest.coords, rest.coords);
+        for k in 0..=50 {
+            let p = self.motion.pose(k as f64 * 0.1).transform_point(&rest);
+            lo = lo.inf(&p.coords);
+            hi = hi.sup(&p.coords);
+        }
+        let c = (lo + hi) * 0.5;
+        [c.x as f32, c.y as f32, c.z as f32]
+    }
+}
+
+/// Reads a style and builds its model: the one way every command reads a style.
+pub fn load_model(source: &StyleSource) -> Result<(LoadedStyle, HairModel), StyleError> {
+    let loaded = source.load()?;
+    let model = HairModel::from_style(&loaded)?;
+    Ok((loaded, model))
+}
+
+/// The display name of a loaded style: its `name`, else the file stem.
+pub fn style_name(l: &LoadedStyle) -> String {
+    if l.style.name.is_empty() {
+        l.path
+            .file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_default()
+    } else {
+        l.style.name.clone()
+    }
+}

@@ -1,0 +1,166 @@
+//! The solver trait: what `run`, `bench`, frame building and the tests drive, whichever hair
+//! model is simulated.
+//!
+//! A solver owns the state of one hair model under one motion. It knows nothing of threads,
+//! Rerun or the renderer: it steps, reports what happened ([`StepReport`]: events, counters,
+//! named stats), draws its debug primitives into a [`Frame`], and gives the points of every
+//! strand of the model so that the pipeline can smooth them for display and rendering.
+//!
+//! The solvers:
+//!
+//! | [`SolverKind`] | paper | module |
+//! |---|---|---|
+//! | `awt` | Bertails, Kim, Cani, Neumann 2003, *Adaptive Wisp Tree* | [`crate::sim`] |
+//! | `single-level` | the same, every finest node active, no adaptation (its §5.2) | [`crate::sim`] |
+
+use std::sync::Arc;
+
+use nalgebra::Vector3;
+
+use crate::frame::Frame;
+use crate::model::HairModel;
+use crate::motion::Pose;
+use crate::style::SimParams;
+
+pub use crate::sim::report::{AdaptEvent, Aggregate, Counters, EventKind, Stat, StepReport};
+
+/// Which hair model a run simulates (`--model`, `bench --solvers`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum SolverKind {
+    /// The Adaptive Wisp Tree: wisps split and merge (AWT §3).
+    Awt,
+    /// The AWT with every finest node active and no adaptation (the AWT paper's §5.2
+    /// comparison).
+    SingleLevel,
+}
+
+impl SolverKind {
+    /// Every solver, in the order `--help` lists them.
+    pub const ALL: &'static [SolverKind] = &[SolverKind::Awt, SolverKind::SingleLevel];
+
+    /// The name on the command line and in the bench's JSON.
+    pub fn name(self) -> &'static str {
+        match self {
+            SolverKind::Awt => "awt",
+            SolverKind::SingleLevel => "single-level",
+        }
+    }
+
+    /// The entity path segment of its primitives: `/hair/<segment>/nodes`. Single-level is a
+    /// mode of the AWT and draws where the AWT does.
+    pub fn path_segment(self) -> &'static str {
+        match self {
+            SolverKind::Awt | SolverKind::SingleLevel => "awt",
+        }
+    }
+
+    /// One line for `--help` and error messages.
+    pub fn describe(self) -> &'static str {
+        match self {
+            SolverKind::Awt => "Adaptive Wisp Tree (Bertails et al. 2003): wisps split and merge",
+            SolverKind::SingleLevel => "the AWT with every finest node active, no adaptation",
+        }
+    }
+
+    /// The kind named `s` (case-sensitive, as listed by [`SolverKind::names`]).
+    pub fn parse(s: &str) -> Result<SolverKind, String> {
+        Self::ALL
+            .iter()
+            .copied()
+            .find(|k| k.name() == s)
+            .ok_or_else(|| format!("unknown model `{s}` (expected one of: {})", Self::names()))
+    }
+
+    /// `awt, single-level, …`.
+    pub fn names() -> String {
+        Self::ALL
+            .iter()
+            .map(|k| k.name())
+            .collect::<Vec<_>>()
+            .join(", ")
+    }
+}
+
+impl std::fmt::Display for SolverKind {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl std::str::FromStr for SolverKind {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        SolverKind::parse(s)
+    }
+}
+
+/// One hair model in motion. Everything the pipeline needs, and nothing about how it is shown.
+///
+/// The call order of one displayed frame is: `steps_per_frame()` times [`Solver::step`], then
+/// [`Solver::sync_display`], then [`Solver::draw`] and [`Solver::strand_points`] for the strands
+/// shown (any number of times).
+pub trait Solver: Send {
+    /// Which model this is.
+    fn kind(&self) -> SolverKind;
+
+    /// The immutable hair model (strands, GC hierarchy, body) the solver was built from.
+    fn model(&self) -> &Arc<HairModel>;
+
+    /// Simulated time, s (0 after construction and any settling).
+    fn time(&self) -> f64;
+
+    /// Length of one [`Solver::step`], s.
+    fn dt(&self) -> f64;
+
+    /// Steps per displayed frame. A displayed frame lasts `dt() · steps_per_frame()` (40 ms for
+    /// every shipped style).
+    fn steps_per_frame(&self) -> usize;
+
+    /// Where the head and body are at [`Solver::time`].
+    fn pose(&self) -> &Pose;
+
+    /// The tunable parameters in force.
+    fn params(&self) -> &SimParams;
+
+    /// Applies new parameters from the next step on; the hair's state is kept. Parameters that
+    /// the model does not use are listed by [`Solver::ignored_params`].
+    fn set_params(&mut self, params: &SimParams);
+
+    /// Names of the `sim:` fields this model ignores (the pipeline says so once).
+    fn ignored_params(&self) -> &'static [&'static str] {
+        &[]
+    }
+
+    /// A report with room for everything a step writes into it, so that stepping allocates
+    /// nothing.
+    fn new_report(&self) -> StepReport;
+
+    /// Advances by [`Solver::dt`], writing the step's events, counters and stats into `report`
+    /// (cleared first).
+    fn step(&mut self, report: &mut StepReport);
+
+    /// Brings derived positions (followed nodes, dense strands) up to date with the last step.
+    /// Call before [`Solver::draw`] and [`Solver::strand_points`].
+    fn sync_display(&mut self);
+
+    /// Draws the model's debug primitives into `frame`: [`Frame::nodes`], [`Frame::segments`]
+    /// (already cleared) and any extra primitive sets ([`Frame::primitives`]) under
+    /// `/hair/<path_segment>/…`. Strands and body are drawn by the pipeline.
+    fn draw(&self, frame: &mut Frame);
+
+    /// Appends the current control points of strand `strand` of the model (root first) to
+    /// `out`. Every strand of the model has points; the pipeline smooths them.
+    fn strand_points(&self, strand: usize, out: &mut Vec<Vector3<f64>>);
+
+    /// Checks the model's invariants (structure, finiteness); `Err` says which one broke.
+    fn validate(&self) -> Result<(), String>;
+
+    /// Threads used inside a step (1 or 2), where the solver has a parallel stage. The result
+    /// never depends on it.
+    fn set_threads(&mut self, _threads: usize) {}
+
+    /// Bytes held by reused step buffers (for the allocation checks); 0 if not tracked.
+    fn reserved_bytes(&self) -> usize {
+        0
+    }
+}
