@@ -16,8 +16,8 @@ use criterion::{criterion_group, criterion_main, BatchSize, Criterion};
 use nalgebra::{Point3, Vector3};
 use wisptree::frame::{Frame, FrameBuilder};
 use wisptree::motion::Motion;
-use wisptree::sim::collide::{self, BodySphere, ContactParams, HairCollider};
-use wisptree::sim::{awt, dynamics, Simulation, StepReport};
+use wisptree::solver::awt::collide::{self, BodySphere, ContactParams, HairCollider};
+use wisptree::solver::awt::{dynamics, forest as awt, Simulation, StepReport};
 use wisptree::style::Link;
 
 /// Steps of warm-up after settling: 1 s of `lean` at 10 ms.
@@ -27,7 +27,10 @@ fn warmed(style: &str, single_level: bool) -> Simulation {
     let path = Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("styles")
         .join(style);
-    let (loaded, model) = wisptree::cli::load_model(&path).expect("the style loads");
+    let (loaded, model) = wisptree::scene::load_model(
+        &wisptree::style::builtin::StyleSource::File(path.to_path_buf()),
+    )
+    .expect("the style loads");
     let model = Arc::new(model);
     let motion = Motion::parse("lean", Point3::from(model.scalp_center)).expect("lean");
     let mut sim = Simulation::from_style(model, &loaded.style, motion, single_level);
@@ -212,10 +215,12 @@ fn display(c: &mut Criterion) {
         .expect("memory recording");
     let head = sim.model.scalp_center;
     let mut logger = wisptree::stream::Logger::new(
-        rec,
-        sim.model.level_count() as u16,
-        "long curly",
-        [head.x as f32, head.y as f32, head.z as f32],
+        wisptree::stream::sink::Recording(rec),
+        &wisptree::stream::LoggerSetup::new(
+            sim.model.level_count() as u16,
+            "long curly",
+            [head.x as f32, head.y as f32, head.z as f32],
+        ),
     )
     .expect("logger");
     let mut index = 0;

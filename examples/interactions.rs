@@ -10,8 +10,8 @@ use std::time::Instant;
 
 use nalgebra::Point3;
 use wisptree::motion::Motion;
-use wisptree::sim::collide::{ContactParams, HairCollider, PairStats};
-use wisptree::sim::{Simulation, StepReport};
+use wisptree::solver::awt::collide::{ContactParams, HairCollider, PairStats};
+use wisptree::solver::awt::{Simulation, StepReport};
 
 fn main() -> anyhow::Result<()> {
     let mut styles = Vec::new();
@@ -29,7 +29,9 @@ fn main() -> anyhow::Result<()> {
     }
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("styles");
     for style in styles {
-        let (loaded, model) = wisptree::cli::load_model(&dir.join(format!("{style}.ron")))?;
+        let (loaded, model) = wisptree::scene::load_model(
+            &wisptree::style::builtin::StyleSource::File(dir.join(format!("{style}.ron"))),
+        )?;
         let model = Arc::new(model);
         let motion = Motion::parse("lean", Point3::from(model.scalp_center))?;
         let mut sim = Simulation::from_style(model, &loaded.style, motion, false);

@@ -4,12 +4,11 @@
 //! `cargo run --release --example probe -- styles/long.ron lean 5 [split_threshold]`
 //! (`WT_EPS=0.01` overrides the contact epsilon, `WT_EVENTS=1` prints the events after 3 s)
 
-use std::path::Path;
 use std::sync::Arc;
 
 use nalgebra::Point3;
 use wisptree::motion::Motion;
-use wisptree::sim::{EventKind, Simulation, StepReport};
+use wisptree::solver::awt::{EventKind, Simulation, StepReport};
 
 fn main() -> anyhow::Result<()> {
     let args: Vec<String> = std::env::args().skip(1).collect();
@@ -19,7 +18,8 @@ fn main() -> anyhow::Result<()> {
         .unwrap_or("styles/long.ron");
     let motion = args.get(1).map(String::as_str).unwrap_or("lean");
     let secs: f64 = args.get(2).map(|s| s.parse()).transpose()?.unwrap_or(5.0);
-    let (loaded, model) = wisptree::cli::load_model(Path::new(style))?;
+    let (loaded, model) =
+        wisptree::scene::load_model(&wisptree::style::builtin::StyleSource::parse(style))?;
     let model = Arc::new(model);
     let motion = Motion::parse(motion, Point3::from(model.scalp_center))?;
     let mut sim = Simulation::from_style(model.clone(), &loaded.style, motion, false);

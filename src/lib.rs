@@ -1,25 +1,46 @@
 //! wisptree: long hair animated with the Adaptive Wisp Tree (Bertails, Kim, Cani, Neumann,
-//! SCA 2003), streamed live to the Rerun viewer or to a `.rrd` recording.
+//! SCA 2003), streamed live to the Rerun viewer or to a `.rrd` recording, beside the models the
+//! AWT grew from.
 //!
-//! The pipeline, in module order:
+//! The pipeline, in module order (a module uses only the modules below it):
 //!
 //! ```text
-//! style ──▶ model ──▶ sim (+ motion) ──▶ frame ──▶ stream (Rerun)
-//!   RON      GC hierarchy   AWT step         snapshot    logging thread
+//! cli         arguments → option structs, exit codes
+//! bench       the §5.2 table and the other benchmarks
+//! app         run: simulation, logging threads, keys, reload, stop
+//! stream      the only Rerun code: sinks, entity paths, blueprint, Logger
+//! experiment  the papers' experiments, each a few solvers and a number
+//! pipeline    stepping a frame, filling a Frame from a solver
+//! scene       the one loader: style + motion + model choice → solver
+//! solver      the Solver trait and the solvers (awt/)
+//! frame       the Frame snapshot: primitives, strands, body, events, stats
+//! report      what a step reports: events, counters, stats, stage timers
+//! motion      head and body motion
+//! model       the multiresolution GC hierarchy, built once from a style
+//! style       the RON schema, validation, generation and import
+//! error       user errors and exit codes
 //! ```
 //!
-//! `style`, `model`, `motion` and `sim` know nothing of Rerun; `stream` does no physics.
+//! Solvers know nothing of Rerun; `stream` does no physics.
 
+pub mod app;
 pub mod bench;
 pub mod cli;
+pub mod error;
 pub mod experiment;
 pub mod frame;
 pub mod model;
 pub mod motion;
-pub mod run;
+pub mod pipeline;
+pub mod report;
 pub mod scene;
-pub mod sim;
 pub mod solver;
 pub mod stream;
 pub mod style;
-pub mod tune;
+
+/// Old paths of the AWT solver (`crate::sim::…`), kept while other branches move over.
+#[doc(hidden)]
+pub mod sim {
+    pub use crate::report;
+    pub use crate::solver::awt::*;
+}

@@ -83,16 +83,16 @@ impl Scene {
 
     /// The AWT (or its single-level mode, as [`Scene::solver`] chooses) as its concrete type,
     /// for tests and benches that look inside it.
-    pub fn awt(&self) -> crate::sim::Simulation {
+    pub fn awt(&self) -> crate::solver::awt::Simulation {
         self.awt_with(&self.loaded.style.sim)
     }
 
-    fn awt_with(&self, params: &SimParams) -> crate::sim::Simulation {
-        crate::sim::Simulation::with_params(
+    fn awt_with(&self, params: &SimParams) -> crate::solver::awt::Simulation {
+        crate::solver::awt::Simulation::with_params(
             self.model.clone(),
             self.motion.clone(),
             self.solver == SolverKind::SingleLevel,
-            Some(crate::sim::Tunables {
+            Some(crate::solver::awt::Tunables {
                 params: params.clone(),
                 link: self.loaded.style.link.clone(),
             }),
@@ -148,4 +148,62 @@ pub fn style_name(l: &LoadedStyle) -> String {
     } else {
         l.style.name.clone()
     }
+}
+
+impl Scene {
+    /// What the user should know about the scene before it runs (roots or rest nodes inside a
+    /// collision sphere, …); see [`warnings`].
+    pub fn warnings(&self) -> Vec<String> {
+        warnings(&self.model)
+    }
+}
+
+/// Strand roots and rest nodes that start inside a body sphere, per sphere: how many, and by
+/// how much at most. Imported hair often has them (its collision spheres were fitted for
+/// another solver); the body then pushes those nodes out at the first step, and a root stays
+/// inside for good.
+pub fn warnings(model: &HairModel) -> Vec<String> {
+    let mut out = Vec::new();
+    let k = model.k;
+    for (si, sp) in model.body.iter().enumerate() {
+        let c = nalgebra::Vector3::from(sp.center);
+        let depth = |p: &nalgebra::Vector3<f64>| sp.radius - (p - c).norm();
+        let (mut roots, mut root_depth) = (0usize, 0.0f64);
+        for s in 0..model.strands.len() {
+            let d = depth(&model.strands.rest[s * k]);
+            if d > 0.0 {
+                roots += 1;
+                root_depth = root_depth.max(d);
+            }
+        }
+        let (mut nodes, mut node_depth) = (0usize, 0.0f64);
+        for lv in &model.levels {
+            for p in &lv.rest_pos {
+                let d = depth(p);
+                if d > 0.0 {
+                    nodes += 1;
+                    node_depth = node_depth.max(d);
+                }
+            }
+        }
+        let at = format!(
+            "body sphere {si} (centre ({:.3}, {:.3}, {:.3}) m, radius {:.3} m)",
+            sp.center[0], sp.center[1], sp.center[2], sp.radius
+        );
+        if roots > 0 {
+            out.push(format!(
+                "{roots} of {} strand roots are inside {at}, by up to {:.1} mm",
+                model.strands.len(),
+                root_depth * 1e3
+            ));
+        }
+        if nodes > 0 {
+            out.push(format!(
+                "{nodes} rest nodes (all levels) are inside {at}, by up to {:.1} mm; the body \
+                 pushes them out at the first step",
+                node_depth * 1e3
+            ));
+        }
+    }
+    out
 }

@@ -19,7 +19,7 @@ use std::sync::Arc;
 use nalgebra::Point3;
 use wisptree::frame::{Frame, FrameBuilder};
 use wisptree::motion::Motion;
-use wisptree::sim::{Simulation, StepReport};
+use wisptree::solver::awt::{Simulation, StepReport};
 
 struct Counting;
 
@@ -93,7 +93,10 @@ fn simulation(style: &str, single_level: bool) -> Simulation {
     let path = Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("styles")
         .join(style);
-    let (loaded, model) = wisptree::cli::load_model(&path).expect("the style loads");
+    let (loaded, model) = wisptree::scene::load_model(
+        &wisptree::style::builtin::StyleSource::File(path.to_path_buf()),
+    )
+    .expect("the style loads");
     let model = Arc::new(model);
     let motion = Motion::parse("lean", Point3::from(model.scalp_center)).expect("lean");
     Simulation::from_style(model, &loaded.style, motion, single_level)

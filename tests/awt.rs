@@ -6,8 +6,8 @@ use common::*;
 use nalgebra::{Rotation3, Vector3};
 use wisptree::model::HairModel;
 use wisptree::motion::Pose;
-use wisptree::sim::awt::{self, AdaptScratch, Forest};
-use wisptree::sim::{EventKind, StepReport};
+use wisptree::solver::awt::forest::{self as awt, AdaptScratch, Forest};
+use wisptree::solver::awt::{EventKind, StepReport};
 use wisptree::style::SimParams;
 
 const K: usize = 8;
@@ -26,7 +26,11 @@ fn params(split: f64, merge_v: f64) -> SimParams {
     }
 }
 
-fn adapt_once(m: &HairModel, f: &mut Forest, p: &SimParams) -> Vec<wisptree::sim::AdaptEvent> {
+fn adapt_once(
+    m: &HairModel,
+    f: &mut Forest,
+    p: &SimParams,
+) -> Vec<wisptree::solver::awt::AdaptEvent> {
     let mut ev = Vec::new();
     awt::adapt(m, f, p, 0.0, &mut AdaptScratch::default(), &mut ev);
     ev
@@ -180,7 +184,7 @@ fn merge_places_the_super_node_at_the_centre_of_mass_with_mean_velocity_and_tigh
     f.validate(&m, &Pose::identity()).unwrap();
 }
 
-fn no_merge(ev: Vec<wisptree::sim::AdaptEvent>) -> bool {
+fn no_merge(ev: Vec<wisptree::solver::awt::AdaptEvent>) -> bool {
     ev.iter().all(|e| e.kind != EventKind::Merge)
 }
 
@@ -243,7 +247,7 @@ fn a_non_active_node_rotates_with_its_segment() {
     f.state[0].pos[i] = a_new;
     f.follow_all(&m, &Pose::identity());
     let got = f.state[1].pos[i] - a_new;
-    let want = wisptree::sim::awt::min_rotation(&(a - parent), &(a_new - parent)) * d;
+    let want = wisptree::solver::awt::forest::min_rotation(&(a - parent), &(a_new - parent)) * d;
     assert!((got - want).norm() < 1e-12, "{got} vs {want}");
     // The rotation is a real one: the offset changed direction.
     assert!((got - d).norm() > 1e-3 * d.norm().max(1e-6));
@@ -253,8 +257,12 @@ fn a_non_active_node_rotates_with_its_segment() {
 fn a_strand_whose_wisp_never_splits_moves_rigidly_with_it() {
     let text = style_text(2, &[3], K, 1, "Rigid(iterations: 8)", "");
     let (loaded, model) = synthetic_model(&text, 30, 0.4, 5);
-    let mut sim =
-        wisptree::sim::Simulation::from_style(model.clone(), &loaded.style, motion("still"), false);
+    let mut sim = wisptree::solver::awt::Simulation::from_style(
+        model.clone(),
+        &loaded.style,
+        motion("still"),
+        false,
+    );
     sim.update_followers();
     let mut before = Vec::new();
     for s in 0..model.strands.len() {

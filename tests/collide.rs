@@ -1,7 +1,7 @@
 //! Hair–hair and hair–body interaction (src/sim/collide.rs).
 
 use nalgebra::Vector3;
-use wisptree::sim::collide::{
+use wisptree::solver::awt::collide::{
     accumulate_brute_force, closest_segment_params, resolve_body, BodySphere, ContactParams,
     HairCollider, PairStats, SegmentsView, CELLS_PER_SEGMENT, MAX_CELLS,
 };

@@ -9,7 +9,7 @@ use common::*;
 use nalgebra::{Point3, Vector3};
 use wisptree::model::{HairModel, NONE};
 use wisptree::motion::Motion;
-use wisptree::sim::{Simulation, StepReport, NO_SLOT};
+use wisptree::solver::awt::{Simulation, StepReport, NO_SLOT};
 
 const PAPER: [(&str, usize, usize); 4] = [
     ("short.ron", 2, 5149),
@@ -194,8 +194,8 @@ fn count_events(name: &str, motion: &str, secs: f64, split: Option<f64>) -> (usi
         s.step(&mut r);
         for e in &r.events {
             match e.kind {
-                wisptree::sim::EventKind::Split => splits += 1,
-                wisptree::sim::EventKind::Merge => merges += 1,
+                wisptree::solver::awt::EventKind::Split => splits += 1,
+                wisptree::solver::awt::EventKind::Merge => merges += 1,
                 other => panic!("the AWT reported a {other:?} event"),
             }
         }

@@ -14,11 +14,14 @@ use rerun::external::re_log_types::LogMsg;
 use rerun::log::Chunk;
 use rerun::{LineStrips3D, Points3D, Scalars, TextLog, TimelineName};
 use rrd::rows;
+use wisptree::app::tune::{self, StyleChange};
+use wisptree::app::{self as run, RunOptions, StopSignal};
 use wisptree::frame::Frame;
-use wisptree::run::{self, RunArgs, Setup, SinkArgs, StopSignal};
-use wisptree::sim::report::{EventKind, StepReport};
+use wisptree::report::{EventKind, StepReport};
+use wisptree::scene::Scene;
+use wisptree::solver::SolverKind;
 use wisptree::stream::paths;
-use wisptree::tune::{self, StyleChange};
+use wisptree::stream::sink::SinkChoice;
 
 /// A small generated style: 4 top-level wisps, 2 levels, K = 8, about 300 strands. Simulates a
 /// second in a fraction of a second, and splits under `shake`.
@@ -57,20 +60,20 @@ fn write_style(dir: &Path, split: &str) -> PathBuf {
     p
 }
 
-fn args(style: &Path, out: &Path, seconds: f64, watch: bool) -> RunArgs {
-    RunArgs {
-        style: style.to_path_buf(),
+fn args(style: &Path, out: &Path, seconds: f64, watch: bool) -> RunOptions {
+    RunOptions {
+        style: style.display().to_string(),
         motion: MOTION.to_owned(),
+        model: SolverKind::Awt,
         seconds: Some(seconds),
         strands: STRANDS,
-        single_level: false,
-        watch,
-        no_watch: !watch,
-        sink: SinkArgs {
-            save: Some(out.to_path_buf()),
-            ..SinkArgs::default()
-        },
+        watch: Some(watch),
+        sink: SinkChoice::Save(out.to_path_buf()),
     }
+}
+
+fn load(style: &Path) -> Scene {
+    Scene::load(&style.display().to_string(), MOTION, SolverKind::Awt).unwrap()
 }
 
 /// The recording's (non-blueprint) chunks, decoded from the file with the SDK's decoder.
@@ -206,8 +209,8 @@ fn a_short_recording_holds_every_path_one_row_per_frame_and_the_events_of_each_f
 
     // The same inputs, simulated here without threads: the simulation is deterministic, so
     // every frame must show exactly the events this simulation reports in that frame's steps.
-    let setup = Setup::load(&style, MOTION, false, STRANDS).unwrap();
-    let mut sim = setup.simulation();
+    let setup = load(&style);
+    let mut sim = setup.awt();
     let mut report = StepReport::default();
     let mut expected_splits = Vec::new();
     let mut expected_merges = Vec::new();
@@ -244,15 +247,15 @@ fn the_simulation_loop_fills_frames_like_a_plain_simulation() {
     // The frame-stepping helper used by the simulation thread: events in order, counts right.
     let dir = tempfile::tempdir().unwrap();
     let style = write_style(dir.path(), "0.2");
-    let setup = Setup::load(&style, MOTION, false, STRANDS).unwrap();
-    let mut a = setup.simulation();
-    let mut b = setup.simulation();
+    let setup = load(&style);
+    let mut a = setup.awt();
+    let mut b = setup.awt();
     let mut ra = StepReport::default();
     let mut rb = StepReport::default();
     let mut frame = Frame::default();
     let mut total = 0;
     for _ in 0..25 {
-        run::step_frame(&mut a, &mut ra, &mut frame);
+        wisptree::pipeline::step_frame(&mut a, &mut ra, &mut frame);
         let mut events = Vec::new();
         for _ in 0..b.params.steps_per_frame {
             b.step(&mut rb);
@@ -274,7 +277,7 @@ fn reloading_the_style_changes_the_split_threshold_of_the_next_steps_and_broken_
 ) {
     let dir = tempfile::tempdir().unwrap();
     let style = write_style(dir.path(), "0.2");
-    let setup = Setup::load(&style, MOTION, false, STRANDS).unwrap();
+    let setup = load(&style);
     let current = setup.loaded.style.clone();
 
     // Unchanged text: nothing to do.
@@ -291,7 +294,7 @@ fn reloading_the_style_changes_the_split_threshold_of_the_next_steps_and_broken_
     };
     assert_eq!(new.style.sim.split_threshold, 1.0e6);
 
-    let count_splits = |sim: &mut wisptree::sim::Simulation| {
+    let count_splits = |sim: &mut wisptree::solver::awt::Simulation| {
         let mut r = StepReport::default();
         let mut n = 0;
         for _ in 0..100 {
@@ -304,10 +307,10 @@ fn reloading_the_style_changes_the_split_threshold_of_the_next_steps_and_broken_
         }
         n
     };
-    let mut before = setup.simulation();
+    let mut before = setup.awt();
     assert!(count_splits(&mut before) > 0);
-    let mut after = setup.simulation();
-    after.set_tunables(wisptree::sim::Tunables {
+    let mut after = setup.awt();
+    after.set_tunables(wisptree::solver::awt::Tunables {
         params: new.style.sim.clone(),
         link: new.style.link.clone(),
     });

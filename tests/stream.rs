@@ -14,7 +14,7 @@ use rerun::{
 };
 use rrd::rows;
 use wisptree::frame::Frame;
-use wisptree::sim::report::{AdaptEvent, Counters, EventKind};
+use wisptree::report::{AdaptEvent, Counters, EventKind};
 use wisptree::stream::{self, paths, Logger, MessageLevel};
 
 const LEVELS: u16 = 3;
@@ -29,8 +29,6 @@ fn synthetic_frame(index: u64) -> Frame {
         sim_time: index as f64 * 0.04,
         levels: LEVELS,
         step_ms: 1.5 + index as f64,
-        split_threshold: 0.2,
-        merge_velocity: 0.05,
         ..Frame::default()
     };
     let n_nodes = 4 + index as usize;
@@ -91,13 +89,23 @@ fn synthetic_frame(index: u64) -> Frame {
         f.merges = 1;
         f.messages.push("split threshold changed to 0.2".to_owned());
     }
+    let params = wisptree::style::SimParams {
+        split_threshold: 0.2,
+        merge_velocity: 0.05,
+        ..Default::default()
+    };
+    wisptree::pipeline::fill_stats(&mut f, &params);
     f
 }
 
 const FRAMES: u64 = 5;
 
 fn log_frames(rec: rerun::RecordingStream) -> Logger {
-    let mut logger = Logger::new(rec, LEVELS, "synthetic", HEAD).expect("logger");
+    let mut logger = Logger::new(
+        wisptree::stream::sink::Recording(rec),
+        &wisptree::stream::LoggerSetup::new(LEVELS, "synthetic", HEAD),
+    )
+    .expect("logger");
     for i in 0..FRAMES {
         logger.log_frame(&synthetic_frame(i)).expect("log frame");
     }
@@ -527,7 +535,11 @@ fn demo_recording() {
         ],
         Err(_) => head,
     };
-    let mut logger = Logger::new(rec, LEVELS, "demo", cam_head).expect("logger");
+    let mut logger = Logger::new(
+        wisptree::stream::sink::Recording(rec),
+        &wisptree::stream::LoggerSetup::new(LEVELS, "demo", cam_head),
+    )
+    .expect("logger");
     for index in 0..10u64 {
         let mut f = Frame {
             index,
@@ -618,7 +630,11 @@ fn log_frame_cost() {
     let (rec, storage) = rerun::RecordingStreamBuilder::new("wisptree-cost")
         .memory()
         .expect("memory recording");
-    let mut logger = Logger::new(rec, LEVELS, "cost", HEAD).expect("logger");
+    let mut logger = Logger::new(
+        wisptree::stream::sink::Recording(rec),
+        &wisptree::stream::LoggerSetup::new(LEVELS, "cost", HEAD),
+    )
+    .expect("logger");
     let mut f = synthetic_frame(0);
     let n = 6000;
     f.nodes.positions = (0..n).map(|k| [k as f32 * 1e-4, 1.0, 0.0]).collect();

@@ -22,7 +22,9 @@ use crate::model::HairModel;
 use crate::motion::Pose;
 use crate::style::SimParams;
 
-pub use crate::sim::report::{AdaptEvent, Aggregate, Counters, EventKind, Stat, StepReport};
+pub mod awt;
+
+pub use crate::report::{AdaptEvent, Aggregate, Counters, EventKind, Stat, StepReport};
 
 /// Which hair model a run simulates (`--model`, `bench --solvers`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]

@@ -7,7 +7,7 @@ use std::sync::Arc;
 use nalgebra::Point3;
 use wisptree::model::HairModel;
 use wisptree::motion::Motion;
-use wisptree::sim::Simulation;
+use wisptree::solver::awt::Simulation;
 use wisptree::style::{self, LoadedStyle, RawHair, RawStrand};
 
 /// The repository root.

@@ -1,6 +1,47 @@
-//! What one simulation step reports: the AWT's split and merge events and the counters.
+//! What one simulation step reports, whatever the solver: events (AWT splits and merges, guide
+//! insertions and removals), the common counters, the solver's own stats, stage timings.
 
 use std::time::Duration;
+
+/// Entity paths of the stats every solver reports (see README, "Entity paths"); a solver's own
+/// stats are named where it sets them.
+pub mod paths {
+    /// The per-level active node counts live below this.
+    pub const ACTIVE_LEVEL_PREFIX: &str = "/stats/active_nodes/";
+    /// Entity paths of the per-level active node counts, `/stats/active_nodes/level_N` (a model
+    /// has at most this many levels: the style validation refuses more).
+    pub const ACTIVE_LEVEL_PATHS: [&str; 8] = [
+        "/stats/active_nodes/level_0",
+        "/stats/active_nodes/level_1",
+        "/stats/active_nodes/level_2",
+        "/stats/active_nodes/level_3",
+        "/stats/active_nodes/level_4",
+        "/stats/active_nodes/level_5",
+        "/stats/active_nodes/level_6",
+        "/stats/active_nodes/level_7",
+    ];
+
+    /// Splits in the frame (AWT §3.1).
+    pub const SPLITS: &str = "/stats/splits";
+    /// Merges in the frame (AWT §3.2).
+    pub const MERGES: &str = "/stats/merges";
+    /// Segment pairs that reached the exact test, summed over the frame's steps.
+    pub const PAIRS_TESTED: &str = "/stats/pairs_tested";
+    /// Tested pairs found in contact, summed over the frame's steps.
+    pub const PAIRS_IN_CONTACT: &str = "/stats/pairs_in_contact";
+    /// Body contacts, summed over the frame's steps.
+    pub const BODY_CONTACTS: &str = "/stats/body_contacts";
+    /// Kinetic energy at the end of the frame, J.
+    pub const KINETIC_ENERGY: &str = "/stats/kinetic_energy";
+    /// Wall-clock time per step, ms.
+    pub const STEP_MS: &str = "/stats/step_ms";
+    /// Frames dropped so far because the logger fell behind (live only).
+    pub const DROPPED_FRAMES: &str = "/stats/dropped_frames";
+    /// The split threshold in force, m²/s².
+    pub const SPLIT_THRESHOLD: &str = "/params/split_threshold";
+    /// The merge velocity threshold in force, m/s.
+    pub const MERGE_VELOCITY: &str = "/params/merge_velocity";
+}
 
 /// Which adaptation happened.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -88,37 +129,83 @@ pub struct AdaptEvent {
     pub rel_velocity: f64,
 }
 
-/// Time spent in each stage of a step.
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
-pub struct StageTimes {
-    pub forces: Duration,
-    pub interactions: Duration,
-    pub integrate: Duration,
-    pub links: Duration,
-    pub obstacles: Duration,
-    pub adapt: Duration,
-    pub follow: Duration,
+/// The stages of a step, named once: every solver times its stages with these (a solver
+/// without one of them leaves it at zero), and the bench prints them in this order.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Stage {
+    /// Pose, external forces (gravity, drag, wind).
+    Forces,
+    /// Hair–hair interaction detection and response.
+    Interactions,
+    /// Integration of the dynamics.
+    Integrate,
+    /// Link constraints (rigid links, springs between steps).
+    Links,
+    /// Body collisions.
+    Obstacles,
+    /// Adaptation (AWT split and merge, guide insertion and removal).
+    Adapt,
+    /// Following (non-simulated nodes and strands).
+    Follow,
 }
 
+impl Stage {
+    /// Every stage, in step order.
+    pub const ALL: [Stage; 7] = [
+        Stage::Forces,
+        Stage::Interactions,
+        Stage::Integrate,
+        Stage::Links,
+        Stage::Obstacles,
+        Stage::Adapt,
+        Stage::Follow,
+    ];
+
+    /// Its name in tables and JSON.
+    pub fn name(self) -> &'static str {
+        match self {
+            Stage::Forces => "forces",
+            Stage::Interactions => "interactions",
+            Stage::Integrate => "integrate",
+            Stage::Links => "links",
+            Stage::Obstacles => "obstacles",
+            Stage::Adapt => "adapt",
+            Stage::Follow => "follow",
+        }
+    }
+}
+
+/// Time spent in each stage of a step: one timer per [`Stage`] (rapier keeps one `Timer` per
+/// stage in its `counters`; this is the same idea without the compile-time switch: a clock read
+/// per stage is nothing next to a stage).
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct StageTimes([Duration; 7]);
+
 impl StageTimes {
-    pub fn total(&self) -> Duration {
-        self.forces
-            + self.interactions
-            + self.integrate
-            + self.links
-            + self.obstacles
-            + self.adapt
-            + self.follow
+    /// Runs `f` and adds its wall time to `stage`.
+    #[inline]
+    pub fn time<R>(&mut self, stage: Stage, f: impl FnOnce() -> R) -> R {
+        let t0 = std::time::Instant::now();
+        let r = f();
+        self.0[stage as usize] += t0.elapsed();
+        r
     }
 
+    /// The time of one stage.
+    pub fn get(&self, stage: Stage) -> Duration {
+        self.0[stage as usize]
+    }
+
+    /// All stages together.
+    pub fn total(&self) -> Duration {
+        self.0.iter().sum()
+    }
+
+    /// Adds another step's times.
     pub fn add(&mut self, o: &StageTimes) {
-        self.forces += o.forces;
-        self.interactions += o.interactions;
-        self.integrate += o.integrate;
-        self.links += o.links;
-        self.obstacles += o.obstacles;
-        self.adapt += o.adapt;
-        self.follow += o.follow;
+        for (a, b) in self.0.iter_mut().zip(o.0) {
+            *a += b;
+        }
     }
 }
 

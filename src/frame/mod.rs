@@ -4,7 +4,7 @@
 //! buffers are cleared and refilled, never reallocated once warm, and the frames themselves are
 //! recycled through a return channel.
 
-use crate::sim::report::{AdaptEvent, Counters};
+use crate::report::{AdaptEvent, Counters, Stat};
 
 /// Active nodes of the AWT (paper Fig. 4: spheres).
 #[derive(Debug, Clone, Default)]
@@ -145,9 +145,6 @@ pub struct Frame {
     pub merges: u32,
     /// Frames dropped so far because the logger fell behind (live only).
     pub dropped_frames: u64,
-    /// Parameters in force.
-    pub split_threshold: f64,
-    pub merge_velocity: f64,
     /// Messages for the text log (parameter changes, reloads, warnings), in order.
     pub messages: Vec<String>,
     /// Number of levels of detail of the model (for the annotation context).
@@ -159,7 +156,9 @@ pub struct Frame {
     /// Every stat of the frame as (entity path, value): the common counters, the solver's own
     /// stats, and the pipeline's (step time, dropped frames, parameters). The logger, the bench
     /// and the JSON all read this list.
-    pub stats: Vec<crate::sim::report::Stat>,
+    pub stats: Vec<Stat>,
+    /// The solver's own stats of this frame, aggregated over its steps (part of `stats`).
+    pub solver_stats: Vec<Stat>,
 }
 
 impl Frame {
@@ -207,127 +206,7 @@ impl Frame {
     }
 }
 
-/// Fills `Frame`s from a simulation. Owns the strand subset and scratch buffers, so building a
-/// frame allocates nothing once warm.
-pub struct FrameBuilder {
-    /// The strands drawn, a deterministic evenly spread subset.
-    strands: Vec<u32>,
-    /// Points per strand segment after Catmull-Rom smoothing (1 = the K nodes only).
-    subdivisions: usize,
-    scratch: Vec<nalgebra::Vector3<f64>>,
-}
-
-impl FrameBuilder {
-    /// Draws `n` strands (all of them if `n` is larger), smoothed with `subdivisions` points per
-    /// span.
-    pub fn new(model: &crate::model::HairModel, n: usize, subdivisions: usize) -> FrameBuilder {
-        let total = model.strands.len();
-        let n = n.min(total);
-        // Evenly spaced over the strands, which are grouped by finest GC: every wisp shows.
-        let strands = (0..n).map(|j| ((j * total) / n.max(1)) as u32).collect();
-        FrameBuilder {
-            strands,
-            subdivisions: subdivisions.max(1),
-            scratch: Vec::new(),
-        }
-    }
-
-    pub fn strand_count(&self) -> usize {
-        self.strands.len()
-    }
-
-    /// Overwrites `f`'s geometry with the solver's current state: its primitives, the drawn
-    /// strands (smoothed) and the body. Counters, events and messages are the caller's.
-    pub fn fill(&mut self, solver: &mut dyn crate::solver::Solver, f: &mut Frame) {
-        solver.sync_display();
-        f.sim_time = solver.time();
-        f.solver = solver.kind().path_segment();
-        f.levels = solver.model().level_count() as u16;
-        f.clear_primitives();
-        solver.draw(f);
-
-        f.strands.points.clear();
-        f.strands.offsets.clear();
-        f.strands.offsets.push(0);
-        for &st in &self.strands {
-            self.scratch.clear();
-            solver.strand_points(st as usize, &mut self.scratch);
-            catmull_rom(&self.scratch, self.subdivisions, &mut f.strands.points);
-            f.strands.offsets.push(f.strands.points.len() as u32);
-        }
-        fill_body(solver.model(), solver.pose(), &mut f.body);
-    }
-}
-
-/// Poses the model's body spheres and scalp into `body`.
-pub fn fill_body(m: &crate::model::HairModel, pose: &crate::motion::Pose, body: &mut BodyBuf) {
-    use nalgebra::{Point3, Vector3};
-    let to32 = |v: &Vector3<f64>| [v.x as f32, v.y as f32, v.z as f32];
-    body.sphere_centers.clear();
-    body.sphere_radii.clear();
-    for sp in &m.body {
-        let c = pose.transform_point(&Point3::from(Vector3::from(sp.center)));
-        body.sphere_centers.push(to32(&c.coords));
-        body.sphere_radii.push(sp.radius as f32);
-    }
-    let c = pose.transform_point(&Point3::from(m.scalp_center));
-    body.scalp_center = to32(&c.coords);
-    body.scalp_radii = to32(&m.scalp_radii);
-    let q = pose.iso.rotation;
-    body.scalp_rotation = [q.i as f32, q.j as f32, q.k as f32, q.w as f32];
-}
-
-/// Appends a uniform Catmull-Rom spline through `p` with `sub` points per span (the control
-/// points themselves included, the last one once).
-pub fn catmull_rom(p: &[nalgebra::Vector3<f64>], sub: usize, out: &mut Vec<[f32; 3]>) {
-    let n = p.len();
-    let to32 = |v: nalgebra::Vector3<f64>| [v.x as f32, v.y as f32, v.z as f32];
-    if n < 3 || sub <= 1 {
-        out.extend(p.iter().map(|v| to32(*v)));
-        return;
-    }
-    for i in 0..n - 1 {
-        let p0 = if i == 0 { p[0] * 2.0 - p[1] } else { p[i - 1] };
-        let (p1, p2) = (p[i], p[i + 1]);
-        let p3 = if i + 2 < n {
-            p[i + 2]
-        } else {
-            p[n - 1] * 2.0 - p[n - 2]
-        };
-        for j in 0..sub {
-            let t = j as f64 / sub as f64;
-            let (t2, t3) = (t * t, t * t * t);
-            let v = (p1 * 2.0
-                + (p2 - p0) * t
-                + (p0 * 2.0 - p1 * 5.0 + p2 * 4.0 - p3) * t2
-                + (p1 * 3.0 - p0 - p2 * 3.0 + p3) * t3)
-                * 0.5;
-            out.push(to32(v));
-        }
-    }
-    out.push(to32(p[n - 1]));
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use nalgebra::Vector3;
-
-    #[test]
-    fn catmull_rom_interpolates_its_control_points() {
-        let p: Vec<Vector3<f64>> = (0..5)
-            .map(|i| Vector3::new(i as f64, (i as f64).sin(), 0.0))
-            .collect();
-        let mut out = Vec::new();
-        catmull_rom(&p, 4, &mut out);
-        assert_eq!(out.len(), 4 * 4 + 1);
-        for (i, q) in p.iter().enumerate() {
-            let o = out[i * 4];
-            assert!((o[0] as f64 - q.x).abs() < 1e-6 && (o[1] as f64 - q.y).abs() < 1e-6);
-        }
-        // Between control points it is smooth, not the chord: the midpoint bulges.
-        let mid = out[2];
-        let chord = (p[0] + p[1]) * 0.5;
-        assert!((mid[1] as f64 - chord.y).abs() > 1e-3);
-    }
-}
+/// Old path of the frame builder (now in [`crate::pipeline`]), kept while other branches move
+/// over.
+#[doc(hidden)]
+pub use crate::pipeline::{catmull_rom, FrameBuilder};

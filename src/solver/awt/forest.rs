@@ -13,7 +13,7 @@ use crate::model::{HairModel, NONE};
 use crate::motion::Pose;
 use crate::style::SimParams;
 
-use super::report::{AdaptEvent, EventKind};
+use crate::report::{AdaptEvent, EventKind};
 
 /// Per-level state of every node (active or not), indexed `g * K + i`.
 #[derive(Debug, Clone, Default)]

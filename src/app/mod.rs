@@ -1,0 +1,17 @@
+//! The threads: `wisptree run` (simulation and logging threads, keys, style reload, stop).
+
+mod console;
+mod log_thread;
+mod reload;
+pub mod run;
+mod sim_thread;
+pub mod stop;
+pub mod threads;
+pub mod tune;
+
+pub use run::{run, run_with, simulate_into, RunOptions, RunSummary};
+pub use stop::{stop_on_ctrl_c, StopSignal};
+pub use threads::LoopOptions;
+
+/// Catmull-Rom points per span between two cross-sections of a drawn strand.
+pub const STRAND_SUBDIVISIONS: usize = 2;

@@ -1,0 +1,250 @@
+//! The simulation thread: steps the solver frame by frame, fills frames and hands them to the
+//! logger, applies parameter changes, pauses and restarts.
+
+use std::time::{Duration, Instant};
+
+use crossbeam_channel::{Receiver, Sender, TrySendError};
+
+use super::console::Console;
+use super::stop::StopSignal;
+use super::tune::{self, KeyAction};
+use crate::frame::Frame;
+use crate::pipeline::{self, FrameBuilder};
+use crate::scene::Scene;
+use crate::solver::Solver;
+use crate::style::SimParams;
+
+/// Poll period while paused.
+const PAUSE_POLL: Duration = Duration::from_millis(25);
+/// A live simulation more than this late gives up catching up (no debt piles up).
+const MAX_LATENESS: Duration = Duration::from_millis(250);
+
+/// What the main thread sends to the simulation thread.
+pub enum Control {
+    /// New tunable parameters (from a style reload), with the message describing them.
+    Params(Box<SimParams>, String),
+    /// A new model (geometry changed): restart on it.
+    Rebuild(Box<Scene>, String),
+    /// A key the main thread does not handle itself.
+    Key(KeyAction),
+}
+
+/// What the simulation thread did.
+#[derive(Debug, Default)]
+pub struct SimOutcome {
+    /// Frames produced (logged or dropped).
+    pub frames: u64,
+    /// Frames dropped because the logger was full (live only).
+    pub dropped: u64,
+    /// Simulated time at the last frame, across restarts.
+    pub sim_time: f64,
+    /// Splits and merges over the run.
+    pub splits: u64,
+    /// See `splits`.
+    pub merges: u64,
+    /// Restarts (reloaded model, restart key).
+    pub restarts: u32,
+}
+
+/// Everything the simulation thread owns.
+pub struct SimThread {
+    /// The scene now simulated (replaced on a rebuild).
+    pub scene: Scene,
+    /// Strands drawn per frame.
+    pub strands: usize,
+    /// Frames to produce; `None` until stopped.
+    pub frames_total: Option<u64>,
+    /// Keep to wall-clock time and drop frames rather than block.
+    pub live: bool,
+    /// Control messages from the main thread.
+    pub ctl: Receiver<Control>,
+    /// Filled frames to the logger.
+    pub tx: Sender<Frame>,
+    /// Emptied frames back from the logger.
+    pub free: Receiver<Frame>,
+}
+
+/// The state of the loop that a control message may change.
+struct LoopState {
+    solver: Box<dyn Solver>,
+    builder: FrameBuilder,
+    messages: Vec<String>,
+    paused: bool,
+    time_offset: f64,
+    out: SimOutcome,
+}
+
+impl SimThread {
+    /// Runs until `frames_total` frames are made, the stop signal, or the logger goes away.
+    pub fn run(mut self, stop: &StopSignal, console: &Console) -> SimOutcome {
+        let mut st = LoopState {
+            solver: self.scene.solver(),
+            builder: FrameBuilder::new(&self.scene.model, self.strands, super::STRAND_SUBDIVISIONS),
+            messages: Vec::new(),
+            paused: false,
+            time_offset: 0.0,
+            out: SimOutcome::default(),
+        };
+        say_ignored(&*st.solver, console, &mut st.messages);
+        let mut report = st.solver.new_report();
+        // A frame the logger had no room for: refilled next time, its messages kept.
+        let mut carry: Option<Frame> = None;
+        // Wall-clock pacing (live): frame `origin_index + n` is due at `origin + n · frame_dt`.
+        let mut origin = Instant::now();
+        let mut origin_index = 0u64;
+        let mut index = 0u64;
+
+        while !stop.is_stopped() && self.frames_total.is_none_or(|n| index < n) {
+            if self.apply_controls(&mut st, console) {
+                origin = Instant::now();
+                origin_index = index;
+                report = st.solver.new_report();
+            }
+            if st.paused {
+                std::thread::sleep(PAUSE_POLL);
+                origin = Instant::now();
+                origin_index = index;
+                continue;
+            }
+            let mut frame = match carry.take() {
+                Some(f) => f,
+                None => {
+                    let mut f = self.free.try_recv().unwrap_or_default();
+                    f.messages.clear();
+                    f
+                }
+            };
+            frame.messages.append(&mut st.messages);
+            make_frame(&mut st, &mut report, &mut frame, index);
+            index += 1;
+            st.out.frames = index;
+
+            if self.live {
+                match self.tx.try_send(frame) {
+                    Ok(()) => {}
+                    Err(TrySendError::Full(mut f)) => {
+                        // The whole frame goes; its messages ride on the next one.
+                        st.out.dropped += 1;
+                        f.events.clear();
+                        carry = Some(f);
+                    }
+                    Err(TrySendError::Disconnected(_)) => break,
+                }
+                let frame_dt = st.solver.dt() * st.solver.steps_per_frame() as f64;
+                pace(stop, &mut origin, &mut origin_index, index, frame_dt);
+            } else if self.tx.send(frame).is_err() {
+                // The logger is gone (it stops the run and reports why).
+                break;
+            }
+        }
+        st.out
+    }
+
+    /// Applies every pending control message; true if any arrived (the clock restarts).
+    fn apply_controls(&mut self, st: &mut LoopState, console: &Console) -> bool {
+        let mut any = false;
+        while let Ok(c) = self.ctl.try_recv() {
+            any = true;
+            let say = |msg: String, st: &mut LoopState| {
+                console.say(&msg);
+                st.messages.push(msg);
+            };
+            match c {
+                Control::Params(p, msg) => {
+                    st.solver.set_params(&p);
+                    say(msg, st);
+                }
+                Control::Rebuild(s, msg) => {
+                    say(msg, st);
+                    st.time_offset += st.solver.time();
+                    self.scene = *s;
+                    st.solver = self.scene.solver();
+                    st.builder = FrameBuilder::new(
+                        &self.scene.model,
+                        self.strands,
+                        super::STRAND_SUBDIVISIONS,
+                    );
+                    st.out.restarts += 1;
+                }
+                Control::Key(KeyAction::TogglePause) => {
+                    st.paused = !st.paused;
+                    say(
+                        (if st.paused { "paused" } else { "resumed" }).to_owned(),
+                        st,
+                    );
+                }
+                Control::Key(KeyAction::Restart) => {
+                    // Same model and motion, the parameters now in force (keys included).
+                    st.time_offset += st.solver.time();
+                    let params = st.solver.params().clone();
+                    st.solver = self.scene.solver_with(&params);
+                    say("restarted the simulation (key)".to_owned(), st);
+                    st.out.restarts += 1;
+                }
+                Control::Key(a) => {
+                    let mut p = st.solver.params().clone();
+                    if let Some(msg) = tune::apply_key(&mut p, a) {
+                        st.solver.set_params(&p);
+                        say(msg, st);
+                    }
+                }
+            }
+        }
+        any
+    }
+}
+
+/// Steps and fills frame `index`.
+fn make_frame(
+    st: &mut LoopState,
+    report: &mut crate::report::StepReport,
+    f: &mut Frame,
+    index: u64,
+) {
+    f.step_ms = pipeline::step_frame(&mut *st.solver, report, f);
+    st.builder.fill(&mut *st.solver, f);
+    f.index = index;
+    f.sim_time += st.time_offset;
+    f.dropped_frames = st.out.dropped;
+    pipeline::fill_stats(f, st.solver.params());
+    st.out.splits += f.splits as u64;
+    st.out.merges += f.merges as u64;
+    st.out.sim_time = f.sim_time;
+}
+
+/// Waits until frame `index` is due (live runs keep to wall-clock time).
+fn pace(
+    stop: &StopSignal,
+    origin: &mut Instant,
+    origin_index: &mut u64,
+    index: u64,
+    frame_dt: f64,
+) {
+    let due = *origin + Duration::from_secs_f64((index - *origin_index) as f64 * frame_dt);
+    let now = Instant::now();
+    if now > due + MAX_LATENESS {
+        *origin = now;
+        *origin_index = index;
+    }
+    while !stop.is_stopped() {
+        let now = Instant::now();
+        if now >= due {
+            break;
+        }
+        std::thread::sleep((due - now).min(PAUSE_POLL));
+    }
+}
+
+/// Says once which `sim:` parameters the solver ignores.
+fn say_ignored(solver: &dyn Solver, console: &Console, messages: &mut Vec<String>) {
+    let ignored = solver.ignored_params();
+    if !ignored.is_empty() {
+        let msg = format!(
+            "model `{}` ignores these sim parameters: {}",
+            solver.kind(),
+            ignored.join(", ")
+        );
+        console.say(&msg);
+        messages.push(msg);
+    }
+}

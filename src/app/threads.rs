@@ -1,0 +1,292 @@
+//! Starting the simulation and logging threads, watching them from the main thread (keys, the
+//! style file, the viewer, progress) and collecting what they did.
+
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::Arc;
+use std::thread::JoinHandle;
+use std::time::Duration;
+
+use anyhow::Context as _;
+use crossbeam_channel::{Receiver, Sender};
+
+use super::console::{poll_key, Console};
+use super::log_thread::LogThread;
+use super::reload::handle_reload;
+use super::run::RunSummary;
+use super::sim_thread::{Control, SimOutcome, SimThread};
+use super::stop::StopSignal;
+use super::tune::{self, KeyAction};
+use crate::frame::Frame;
+use crate::scene::Scene;
+use crate::stream::sink::{OpenSink, SinkWatcher, ViewerStatus};
+use crate::stream::{LoggerSetup, MessageLevel};
+
+/// Frames queued between the simulation and the logger. Small: live, a long queue is latency.
+const QUEUE_FRAMES: usize = 3;
+/// How long a viewer may take to accept the connection before the run gives up on it.
+const VIEWER_CONNECT_TIMEOUT: Duration = Duration::from_secs(15);
+/// How long, after stopping, the logger may take to hand over what is queued before the run
+/// returns anyway (a viewer that stopped reading must not hang the process).
+const LOGGER_FINISH_TIMEOUT: Duration = Duration::from_secs(20);
+/// The same, once the viewer is known to be gone.
+const LOST_VIEWER_FINISH_TIMEOUT: Duration = Duration::from_secs(2);
+/// Poll period of the main thread (keys, watcher, viewer status).
+const POLL: Duration = Duration::from_millis(25);
+
+/// How the loop runs.
+#[derive(Debug, Clone)]
+pub struct LoopOptions {
+    /// Simulated seconds; `None` runs until stopped.
+    pub seconds: Option<f64>,
+    /// Keep to wall-clock time and drop frames instead of blocking (a viewer is watching).
+    pub live: bool,
+    /// Watch the style file (a style given by path only).
+    pub watch: bool,
+    /// Read keys from the terminal (only if stdin is a terminal).
+    pub keys: bool,
+    /// Show a progress bar (only if stderr is a terminal and the length is known).
+    pub progress: bool,
+    /// Strands drawn per frame.
+    pub strands: usize,
+}
+
+/// The two worker threads and the channels the main thread keeps.
+struct Workers {
+    sim: JoinHandle<SimOutcome>,
+    logger: JoinHandle<anyhow::Result<()>>,
+    logger_done: Receiver<()>,
+    ctl: Sender<Control>,
+    notes: Sender<(MessageLevel, String)>,
+    logged: Arc<AtomicU64>,
+}
+
+/// Runs the scene into the sink until `opts.seconds` are simulated or `stop` is triggered. A
+/// live viewer is watched: one that goes away stops the run.
+pub fn simulate(
+    scene: &Scene,
+    sink: OpenSink,
+    opts: &LoopOptions,
+    stop: &StopSignal,
+) -> anyhow::Result<RunSummary> {
+    let frames_total = opts.seconds.map(|s| scene.frames_for(s));
+    let console = if opts.progress {
+        Console::with_progress(frames_total)
+    } else {
+        Console::default()
+    };
+    let viewer = sink.watcher();
+    let w = start_workers(scene, sink, opts, frames_total, stop, &console)?;
+    let mut summary = RunSummary::default();
+    let never_connected = watch_run(scene, opts, &w, &viewer, stop, &console, &mut summary);
+    let asked_to_stop = stop.is_stopped();
+    stop.stop();
+    let Workers {
+        sim,
+        logger,
+        logger_done,
+        ctl,
+        notes,
+        logged,
+    } = w;
+    drop(ctl);
+    drop(notes);
+    let sim = sim
+        .join()
+        .map_err(|_| anyhow::anyhow!("the simulation thread panicked"))?;
+    // The logger drains the queue and flushes; a viewer that stopped reading could keep it
+    // waiting, so do not wait forever (and with the viewer gone, not long).
+    let finish_timeout = if summary.viewer_lost {
+        LOST_VIEWER_FINISH_TIMEOUT
+    } else {
+        LOGGER_FINISH_TIMEOUT
+    };
+    let logger_result = match logger_done.recv_timeout(finish_timeout) {
+        Ok(()) => logger
+            .join()
+            .map_err(|_| anyhow::anyhow!("the logging thread panicked"))?,
+        Err(_) => Err(anyhow::anyhow!(
+            "the logging thread did not finish within {} s; the recording may be incomplete",
+            finish_timeout.as_secs()
+        )),
+    };
+    if let Some(b) = &console.bar {
+        b.set_position(logged.load(Ordering::Relaxed));
+        b.finish_and_clear();
+    }
+    summary.frames_logged = logged.load(Ordering::Relaxed);
+    summary.frames_dropped = sim.dropped;
+    summary.sim_time = sim.sim_time;
+    summary.splits = sim.splits;
+    summary.merges = sim.merges;
+    summary.restarts += sim.restarts;
+    summary.interrupted = asked_to_stop && frames_total.is_none_or(|n| sim.frames < n);
+    if let Some(msg) = never_connected {
+        // Nothing was shown anywhere: an error, not a normal end.
+        anyhow::bail!(msg);
+    }
+    match logger_result {
+        // (With the viewer gone, a failed final flush is expected and already explained.)
+        Err(e) if !summary.viewer_lost => Err(e),
+        _ => Ok(summary),
+    }
+}
+
+fn start_workers(
+    scene: &Scene,
+    sink: OpenSink,
+    opts: &LoopOptions,
+    frames_total: Option<u64>,
+    stop: &StopSignal,
+    console: &Console,
+) -> anyhow::Result<Workers> {
+    let (frame_tx, frame_rx) = crossbeam_channel::bounded::<Frame>(QUEUE_FRAMES);
+    // Unbounded, but it never holds more frames than exist: QUEUE_FRAMES + 2 or so.
+    let (free_tx, free_rx) = crossbeam_channel::unbounded::<Frame>();
+    let (ctl_tx, ctl_rx) = crossbeam_channel::unbounded::<Control>();
+    let (note_tx, note_rx) = crossbeam_channel::unbounded::<(MessageLevel, String)>();
+    let (done_tx, done_rx) = crossbeam_channel::bounded::<()>(1);
+    let logged = Arc::new(AtomicU64::new(0));
+
+    let log = LogThread {
+        rec: sink.rec,
+        setup: LoggerSetup::new(
+            scene.model.level_count() as u16,
+            &scene.style_name(),
+            scene.camera_target(),
+        ),
+        frames: frame_rx,
+        free: free_tx,
+        notes: note_rx,
+        live: opts.live,
+    };
+    let logger = {
+        let logged = logged.clone();
+        let stop = stop.clone();
+        std::thread::Builder::new()
+            .name("wisptree-logger".into())
+            .spawn(move || {
+                let r = log.run(&logged);
+                if r.is_err() {
+                    // Nobody is listening any more: stop the simulation too.
+                    stop.stop();
+                }
+                let _ = done_tx.send(());
+                r
+            })
+            .context("starting the logging thread")?
+    };
+    let sim_thread = SimThread {
+        scene: scene.clone(),
+        strands: opts.strands,
+        frames_total,
+        live: opts.live,
+        ctl: ctl_rx,
+        tx: frame_tx,
+        free: free_rx,
+    };
+    let sim = {
+        let stop = stop.clone();
+        let console = console.clone();
+        std::thread::Builder::new()
+            .name("wisptree-sim".into())
+            .spawn(move || sim_thread.run(&stop, &console))
+            .context("starting the simulation thread")?
+    };
+    Ok(Workers {
+        sim,
+        logger,
+        logger_done: done_rx,
+        ctl: ctl_tx,
+        notes: note_tx,
+        logged,
+    })
+}
+
+/// The main thread's loop while the workers run: keys, the style file, the viewer, progress.
+/// Returns the error message if the viewer never connected.
+fn watch_run(
+    scene: &Scene,
+    opts: &LoopOptions,
+    w: &Workers,
+    viewer: &SinkWatcher,
+    stop: &StopSignal,
+    console: &Console,
+    summary: &mut RunSummary,
+) -> Option<String> {
+    let raw = if opts.keys {
+        tune::RawTerminal::enter()
+    } else {
+        None
+    };
+    if raw.is_some() {
+        console.say(tune::KEY_HELP);
+    }
+    let mut watcher = match scene.source.file() {
+        Some(path) if opts.watch => match tune::StyleWatcher::new(path) {
+            Ok(w) => {
+                console.say(&format!("watching {} for changes", path.display()));
+                Some(w)
+            }
+            Err(e) => {
+                console.say(&format!("not watching the style file: {e:#}"));
+                None
+            }
+        },
+        _ => None,
+    };
+    let mut file_style = scene.loaded.clone();
+    let mut key_error_reported = false;
+    let mut never_connected: Option<String> = None;
+    while !stop.is_stopped() && !w.sim.is_finished() {
+        if raw.is_some() {
+            match poll_key(POLL) {
+                Ok(Some(KeyAction::Quit)) => {
+                    console.say("quitting");
+                    stop.stop();
+                }
+                Ok(Some(KeyAction::Help)) => console.say(tune::KEY_HELP),
+                Ok(Some(a)) => {
+                    let _ = w.ctl.send(Control::Key(a));
+                }
+                Ok(None) => {}
+                Err(e) => {
+                    if !key_error_reported {
+                        console.say(&format!("reading keys failed: {e}"));
+                        key_error_reported = true;
+                    }
+                    std::thread::sleep(POLL);
+                }
+            }
+        } else {
+            std::thread::sleep(POLL);
+        }
+        if watcher.as_mut().is_some_and(|w| w.poll()) {
+            handle_reload(scene, &mut file_style, &w.ctl, &w.notes, console, summary);
+        }
+        let lost = match viewer.status() {
+            ViewerStatus::Gone(why) => Some(why),
+            ViewerStatus::Connecting(t) if t > VIEWER_CONNECT_TIMEOUT => {
+                let msg = format!(
+                    "no Rerun viewer accepted the connection within {} s \
+                     (start one with `rerun`, or record with --save FILE)",
+                    VIEWER_CONNECT_TIMEOUT.as_secs()
+                );
+                never_connected = Some(msg.clone());
+                Some(msg)
+            }
+            _ => None,
+        };
+        if let Some(why) = lost {
+            if never_connected.is_none() {
+                // (Never connecting is returned as the run's error, printed once by main.)
+                console.say(&format!("wisptree: {why}; stopping"));
+            }
+            summary.viewer_lost = true;
+            stop.stop();
+        }
+        if let Some(b) = &console.bar {
+            b.set_position(w.logged.load(Ordering::Relaxed));
+        }
+    }
+    never_connected
+}

@@ -1,0 +1,151 @@
+//! The flags of `wisptree run` (and plain `wisptree`), as clap structs that become plain
+//! option structs.
+
+use std::path::PathBuf;
+
+use crate::app::run::{RunOptions, DEFAULT_MOTION, DEFAULT_STRANDS, DEFAULT_STYLE};
+use crate::solver::SolverKind;
+use crate::stream::sink::{SinkChoice, DEFAULT_CONNECT_URL};
+
+/// `wisptree run` and plain `wisptree`.
+#[derive(Debug, Clone, clap::Args)]
+pub struct RunArgs {
+    /// The hairstyle: a built-in name (short, short_curly, long, long_curly; see `wisptree
+    /// styles`) or a style file (`.ron`).
+    #[arg(long, value_name = "NAME|PATH", default_value = DEFAULT_STYLE)]
+    pub style: String,
+
+    /// Head and body motion: a preset (still, lean, run, jump, shake, stop) or a keyframed
+    /// `.ron` motion file (see `motions/`).
+    #[arg(long, value_name = "NAME|PATH", default_value = DEFAULT_MOTION)]
+    pub motion: String,
+
+    /// The hair model: `awt` (Adaptive Wisp Tree) or `single-level` (the AWT with every
+    /// finest node active, no adaptation).
+    #[arg(long, value_name = "MODEL", default_value = "awt", value_parser = parse_model)]
+    pub model: SolverKind,
+
+    /// Simulated seconds to run. Default: 10 when recording to a file; until Ctrl-C (or `q`)
+    /// when streaming live to a viewer.
+    #[arg(long, value_name = "S", value_parser = parse_seconds)]
+    pub seconds: Option<f64>,
+
+    /// Hair strands drawn per frame (an evenly spread, fixed subset; all of them if the style has
+    /// fewer). The default keeps a 10 s recording under 100 MB.
+    #[arg(long, value_name = "N", default_value_t = DEFAULT_STRANDS, value_parser = parse_strands)]
+    pub strands: usize,
+
+    /// Same as `--model single-level` (kept from earlier versions).
+    #[arg(long)]
+    pub single_level: bool,
+
+    /// Watch the style file and apply saved edits while running: new simulation parameters at
+    /// once, a new model by restarting. Default: on when live, off when recording. A built-in
+    /// style is not a file and is never watched.
+    #[arg(long, overrides_with = "no_watch")]
+    pub watch: bool,
+
+    /// Do not watch the style file.
+    #[arg(long, overrides_with = "watch")]
+    pub no_watch: bool,
+
+    #[command(flatten)]
+    pub sink: SinkArgs,
+}
+
+impl RunArgs {
+    /// The plain options these flags ask for.
+    pub fn options(&self) -> RunOptions {
+        RunOptions {
+            style: self.style.clone(),
+            motion: self.motion.clone(),
+            model: if self.single_level {
+                SolverKind::SingleLevel
+            } else {
+                self.model
+            },
+            seconds: self.seconds,
+            strands: self.strands,
+            watch: match (self.watch, self.no_watch) {
+                (true, _) => Some(true),
+                (_, true) => Some(false),
+                _ => None,
+            },
+            sink: self.sink.choice(),
+        }
+    }
+}
+
+/// Where the recording goes: Rerun's usual sink flags, at most one of them. Without any, a
+/// viewer is spawned if `rerun` is on PATH and starts (or one already listens on port 9876),
+/// else the run is recorded to `wisptree.rrd`.
+///
+/// Not `rerun::clap::RerunArgs` itself: its fields are private, so whether the user chose a sink
+/// cannot be told from the default, and that choice decides the fallback to a file. Its `--bind`
+/// defaults to 0.0.0.0; `--serve` is not offered, so nothing here listens on the network.
+#[derive(Debug, Clone, Default, clap::Args)]
+#[group(id = "sink", multiple = false)]
+pub struct SinkArgs {
+    /// Start a Rerun viewer (`rerun` on PATH) and stream to it live; fail if there is none.
+    #[arg(long)]
+    pub spawn: bool,
+
+    /// Stream live to a running Rerun viewer; optional URL, default
+    /// rerun+http://127.0.0.1:9876/proxy.
+    #[arg(long, value_name = "URL", num_args = 0..=1, default_missing_value = DEFAULT_CONNECT_URL)]
+    pub connect: Option<String>,
+
+    /// Record to this `.rrd` file (open it with `rerun FILE`).
+    #[arg(long, value_name = "PATH")]
+    pub save: Option<PathBuf>,
+
+    /// Write the recording to standard output, to pipe into a viewer: `wisptree -o | rerun -`.
+    #[arg(long, short = 'o')]
+    pub stdout: bool,
+}
+
+impl SinkArgs {
+    /// The sink these flags choose.
+    pub fn choice(&self) -> SinkChoice {
+        if self.stdout {
+            SinkChoice::Stdout
+        } else if let Some(p) = &self.save {
+            SinkChoice::Save(p.clone())
+        } else if let Some(u) = &self.connect {
+            SinkChoice::Connect(u.clone())
+        } else if self.spawn {
+            SinkChoice::Spawn
+        } else {
+            SinkChoice::Auto
+        }
+    }
+}
+
+/// `--model`.
+pub fn parse_model(s: &str) -> Result<SolverKind, String> {
+    SolverKind::parse(s)
+}
+
+/// `--seconds`: positive, finite, at most 10⁶.
+pub fn parse_seconds(s: &str) -> Result<f64, String> {
+    let v: f64 = s
+        .parse()
+        .map_err(|_| format!("`{s}` is not a number of seconds"))?;
+    if v.is_finite() && v > 0.0 && v <= 1.0e6 {
+        Ok(v)
+    } else {
+        Err(format!(
+            "{s}: expected a positive number of simulated seconds (at most 1e6)"
+        ))
+    }
+}
+
+fn parse_strands(s: &str) -> Result<usize, String> {
+    let v: usize = s
+        .parse()
+        .map_err(|_| format!("`{s}` is not a whole number of strands"))?;
+    if v == 0 {
+        return Err("at least one strand must be drawn".to_owned());
+    }
+    Ok(v)
+}

@@ -1,0 +1,110 @@
+//! `wisptree bench` flags, checked into [`BenchOptions`].
+
+use std::path::PathBuf;
+
+use crate::bench::{BenchOptions, PAPER_MODELS, PIPELINE_STRANDS};
+use crate::error::BadInput;
+use crate::solver::SolverKind;
+use crate::style::builtin::StyleSource;
+
+/// `wisptree bench` arguments.
+#[derive(Debug, Clone, clap::Args)]
+pub struct BenchArgs {
+    /// Short run (0.5 s simulated per style and solver) for smoke tests.
+    #[arg(long)]
+    pub quick: bool,
+    /// Also write the numbers as JSON to FILE.
+    #[arg(long, value_name = "FILE")]
+    pub json: Option<PathBuf>,
+    /// Simulated seconds per style and solver (default 10, or 0.5 with --quick).
+    #[arg(long, value_name = "S")]
+    pub seconds: Option<f64>,
+    /// Comma-separated hairstyles: built-in names (see `wisptree styles`), names of
+    /// `<--styles DIR>/<name>.ron`, or paths to `.ron` files.
+    #[arg(
+        long,
+        value_delimiter = ',',
+        default_value = "short,short_curly,long,long_curly"
+    )]
+    pub models: Vec<String>,
+    /// Comma-separated solvers timed on every style (awt, single-level). The default is the
+    /// AWT paper's §5.2 table.
+    #[arg(long, value_delimiter = ',', default_value = "awt,single-level")]
+    pub solvers: Vec<String>,
+    /// Directory of style files that `--models` names refer to (default: the built-in styles).
+    #[arg(long, value_name = "DIR")]
+    pub styles: Option<PathBuf>,
+    /// Skip the pipeline timings (simulation + strands + logging to a .rrd on Long curly).
+    #[arg(long)]
+    pub no_pipeline: bool,
+    /// Strands drawn in the timed pipelines (default: `wisptree run`'s).
+    #[arg(long, value_name = "N", default_value_t = PIPELINE_STRANDS)]
+    pub strands: usize,
+    /// Keep the recording of the `wisptree run` pipeline at FILE instead of a deleted
+    /// temporary file.
+    #[arg(long, value_name = "FILE")]
+    pub rrd: Option<PathBuf>,
+}
+
+impl BenchArgs {
+    /// The checked options; bad values are [`BadInput`] (exit 2).
+    pub fn options(&self) -> anyhow::Result<BenchOptions> {
+        let seconds = match self.seconds {
+            Some(s) if !(s.is_finite() && s > 0.0 && s <= 3600.0) => {
+                return Err(BadInput(format!(
+                    "--seconds must be a positive number of seconds up to 3600, got {s}"
+                ))
+                .into());
+            }
+            Some(s) => s,
+            None if self.quick => 0.5,
+            None => 10.0,
+        };
+        if self.models.is_empty() {
+            return Err(BadInput("--models lists no model".into()).into());
+        }
+        let styles = self
+            .models
+            .iter()
+            .map(|m| self.style(m))
+            .collect::<Result<Vec<_>, _>>()?;
+        let mut solvers = Vec::new();
+        for s in &self.solvers {
+            let k = SolverKind::parse(s).map_err(|e| BadInput(format!("--solvers: {e}")))?;
+            if !solvers.contains(&k) {
+                solvers.push(k);
+            }
+        }
+        if solvers.is_empty() {
+            return Err(BadInput("--solvers lists no solver".into()).into());
+        }
+        Ok(BenchOptions {
+            seconds,
+            styles,
+            solvers,
+            pipeline: !self.no_pipeline,
+            pipeline_style: self.style("long_curly")?,
+            strands: self.strands,
+            rrd: self.rrd.clone(),
+            json: self.json.clone(),
+        })
+    }
+
+    /// A `--models` entry: a name in `--styles DIR`, a built-in name, or a path.
+    fn style(&self, m: &str) -> Result<StyleSource, BadInput> {
+        let source = match &self.styles {
+            Some(dir) if !m.ends_with(".ron") => StyleSource::File(dir.join(format!("{m}.ron"))),
+            _ => StyleSource::parse(m),
+        };
+        if let StyleSource::File(p) = &source {
+            if !p.is_file() {
+                return Err(BadInput(format!(
+                    "--models: no style file for `{m}` at {} (built-in: {}; or give a path to a .ron)",
+                    p.display(),
+                    PAPER_MODELS.join(", ")
+                )));
+            }
+        }
+        Ok(source)
+    }
+}

@@ -1,0 +1,69 @@
+//! The command line: `wisptree [run] …`, `wisptree inspect`, `wisptree styles`,
+//! `wisptree bench`. Turns arguments into plain option structs, runs the command, and maps
+//! errors to exit codes (2 for bad input). Nothing else in the crate uses this module.
+
+mod args;
+mod bench_args;
+mod inspect;
+mod styles;
+
+use clap::{Parser, Subcommand};
+
+pub use args::{RunArgs, SinkArgs};
+pub use bench_args::BenchArgs;
+pub use inspect::{summarize, InspectArgs, ModelSummary};
+pub use styles::StylesArgs;
+
+pub use crate::error::{BadInput, EXIT_BAD_INPUT};
+
+/// The whole command line.
+#[derive(Debug, Parser)]
+#[command(
+    name = "wisptree",
+    version,
+    about = "Animate long hair with the Adaptive Wisp Tree (Bertails et al., SCA 2003) and watch \
+             its wisps split and merge, live in the Rerun viewer or in a .rrd recording.",
+    long_about = None,
+    args_conflicts_with_subcommands = true
+)]
+pub struct Cli {
+    /// The subcommand (default: run).
+    #[command(subcommand)]
+    pub command: Option<Command>,
+    /// `wisptree` with no subcommand runs `wisptree run` with these arguments.
+    #[command(flatten)]
+    pub run: RunArgs,
+}
+
+/// The subcommands.
+#[derive(Debug, Subcommand)]
+pub enum Command {
+    /// Simulate a style under a motion and stream it to Rerun (the default command).
+    Run(RunArgs),
+    /// Build a style's multiresolution model and print its levels, nodes, strands and mass.
+    Inspect(InspectArgs),
+    /// List the built-in styles, or write one to a file to edit.
+    Styles(StylesArgs),
+    /// Reproduce the AWT paper's §5.2 timing table (single-level against AWT on the four paper
+    /// styles under the `lean` motion), and time other solvers with --solvers.
+    Bench(BenchArgs),
+}
+
+/// Runs the command line; returns the process exit code.
+pub fn main() -> i32 {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Some(Command::Inspect(a)) => inspect::inspect(&a),
+        Some(Command::Styles(a)) => styles::styles(&a),
+        Some(Command::Run(a)) => crate::app::run(a.options()),
+        Some(Command::Bench(a)) => a.options().and_then(|o| crate::bench::run(&o)),
+        None => crate::app::run(cli.run.options()),
+    };
+    match result {
+        Ok(()) => 0,
+        Err(e) => {
+            eprintln!("wisptree: {e:#}");
+            crate::error::exit_code(&e)
+        }
+    }
+}

@@ -1,0 +1,241 @@
+//! The stages between a solver and the threads: stepping one displayed frame
+//! ([`step_frame`]) and filling a [`Frame`] from the solver ([`FrameBuilder`]). `wisptree run`,
+//! the bench, the experiments and the tests all go through these.
+
+use std::time::Instant;
+
+use crate::frame::{BodyBuf, Frame};
+use crate::report::{EventKind, StageTimes, StepReport};
+use crate::solver::Solver;
+
+/// Fills `Frame`s from a simulation. Owns the strand subset and scratch buffers, so building a
+/// frame allocates nothing once warm.
+pub struct FrameBuilder {
+    /// The strands drawn, a deterministic evenly spread subset.
+    strands: Vec<u32>,
+    /// Points per strand segment after Catmull-Rom smoothing (1 = the K nodes only).
+    subdivisions: usize,
+    scratch: Vec<nalgebra::Vector3<f64>>,
+}
+
+impl FrameBuilder {
+    /// Draws `n` strands (all of them if `n` is larger), smoothed with `subdivisions` points per
+    /// span.
+    pub fn new(model: &crate::model::HairModel, n: usize, subdivisions: usize) -> FrameBuilder {
+        let total = model.strands.len();
+        let n = n.min(total);
+        // Evenly spaced over the strands, which are grouped by finest GC: every wisp shows.
+        let strands = (0..n).map(|j| ((j * total) / n.max(1)) as u32).collect();
+        FrameBuilder {
+            strands,
+            subdivisions: subdivisions.max(1),
+            scratch: Vec::new(),
+        }
+    }
+
+    pub fn strand_count(&self) -> usize {
+        self.strands.len()
+    }
+
+    /// Overwrites `f`'s geometry with the solver's current state: its primitives, the drawn
+    /// strands (smoothed) and the body. Counters, events and messages are the caller's.
+    pub fn fill(&mut self, solver: &mut dyn crate::solver::Solver, f: &mut Frame) {
+        solver.sync_display();
+        f.sim_time = solver.time();
+        f.solver = solver.kind().path_segment();
+        f.levels = solver.model().level_count() as u16;
+        f.clear_primitives();
+        solver.draw(f);
+
+        f.strands.points.clear();
+        f.strands.offsets.clear();
+        f.strands.offsets.push(0);
+        for &st in &self.strands {
+            self.scratch.clear();
+            solver.strand_points(st as usize, &mut self.scratch);
+            catmull_rom(&self.scratch, self.subdivisions, &mut f.strands.points);
+            f.strands.offsets.push(f.strands.points.len() as u32);
+        }
+        fill_body(solver.model(), solver.pose(), &mut f.body);
+    }
+}
+
+/// Poses the model's body spheres and scalp into `body`.
+pub fn fill_body(m: &crate::model::HairModel, pose: &crate::motion::Pose, body: &mut BodyBuf) {
+    use nalgebra::{Point3, Vector3};
+    let to32 = |v: &Vector3<f64>| [v.x as f32, v.y as f32, v.z as f32];
+    body.sphere_centers.clear();
+    body.sphere_radii.clear();
+    for sp in &m.body {
+        let c = pose.transform_point(&Point3::from(Vector3::from(sp.center)));
+        body.sphere_centers.push(to32(&c.coords));
+        body.sphere_radii.push(sp.radius as f32);
+    }
+    let c = pose.transform_point(&Point3::from(m.scalp_center));
+    body.scalp_center = to32(&c.coords);
+    body.scalp_radii = to32(&m.scalp_radii);
+    let q = pose.iso.rotation;
+    body.scalp_rotation = [q.i as f32, q.j as f32, q.k as f32, q.w as f32];
+}
+
+/// Appends a uniform Catmull-Rom spline through `p` with `sub` points per span (the control
+/// points themselves included, the last one once).
+pub fn catmull_rom(p: &[nalgebra::Vector3<f64>], sub: usize, out: &mut Vec<[f32; 3]>) {
+    let n = p.len();
+    let to32 = |v: nalgebra::Vector3<f64>| [v.x as f32, v.y as f32, v.z as f32];
+    if n < 3 || sub <= 1 {
+        out.extend(p.iter().map(|v| to32(*v)));
+        return;
+    }
+    for i in 0..n - 1 {
+        let p0 = if i == 0 { p[0] * 2.0 - p[1] } else { p[i - 1] };
+        let (p1, p2) = (p[i], p[i + 1]);
+        let p3 = if i + 2 < n {
+            p[i + 2]
+        } else {
+            p[n - 1] * 2.0 - p[n - 2]
+        };
+        for j in 0..sub {
+            let t = j as f64 / sub as f64;
+            let (t2, t3) = (t * t, t * t * t);
+            let v = (p1 * 2.0
+                + (p2 - p0) * t
+                + (p0 * 2.0 - p1 * 5.0 + p2 * 4.0 - p3) * t2
+                + (p1 * 3.0 - p0 - p2 * 3.0 + p3) * t3)
+                * 0.5;
+            out.push(to32(v));
+        }
+    }
+    out.push(to32(p[n - 1]));
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nalgebra::Vector3;
+
+    #[test]
+    fn catmull_rom_interpolates_its_control_points() {
+        let p: Vec<Vector3<f64>> = (0..5)
+            .map(|i| Vector3::new(i as f64, (i as f64).sin(), 0.0))
+            .collect();
+        let mut out = Vec::new();
+        catmull_rom(&p, 4, &mut out);
+        assert_eq!(out.len(), 4 * 4 + 1);
+        for (i, q) in p.iter().enumerate() {
+            let o = out[i * 4];
+            assert!((o[0] as f64 - q.x).abs() < 1e-6 && (o[1] as f64 - q.y).abs() < 1e-6);
+        }
+        // Between control points it is smooth, not the chord: the midpoint bulges.
+        let mid = out[2];
+        let chord = (p[0] + p[1]) * 0.5;
+        assert!((mid[1] as f64 - chord.y).abs() > 1e-3);
+    }
+}
+
+/// Steps one displayed frame: `steps_per_frame` steps, with the frame's events in order, its
+/// counters (those of the last step, except contact counts and stage times, summed) and the
+/// solver's own stats aggregated as each says. Returns the wall time per step in ms.
+pub fn step_frame(solver: &mut dyn Solver, report: &mut StepReport, frame: &mut Frame) -> f64 {
+    let spf = solver.steps_per_frame().max(1);
+    let t0 = Instant::now();
+    frame.events.clear();
+    frame.solver_stats.clear();
+    let (mut tested, mut contact, mut body) = (0u32, 0u32, 0u32);
+    let mut times = StageTimes::default();
+    for k in 0..spf {
+        solver.step(report);
+        frame.events.append(&mut report.events);
+        tested = tested.saturating_add(report.counters.pairs_tested);
+        contact = contact.saturating_add(report.counters.pairs_in_contact);
+        body = body.saturating_add(report.counters.body_contacts);
+        times.add(&report.counters.times);
+        aggregate_stats(&mut frame.solver_stats, &report.stats, k == 0);
+    }
+    // Reuse the frame's per-level vector rather than cloning one.
+    let c = &report.counters;
+    let f = &mut frame.counters;
+    f.active_per_level.clear();
+    f.active_per_level.extend_from_slice(&c.active_per_level);
+    f.segments = c.segments;
+    f.kinetic_energy = c.kinetic_energy;
+    f.pairs_tested = tested;
+    f.pairs_in_contact = contact;
+    f.body_contacts = body;
+    f.times = times;
+    frame.splits = frame
+        .events
+        .iter()
+        .filter(|e| e.kind == EventKind::Split)
+        .count() as u32;
+    frame.merges = frame
+        .events
+        .iter()
+        .filter(|e| e.kind == EventKind::Merge)
+        .count() as u32;
+    t0.elapsed().as_secs_f64() * 1e3 / spf as f64
+}
+
+/// Folds one step's solver stats into the frame's.
+fn aggregate_stats(into: &mut Vec<crate::report::Stat>, step: &[crate::report::Stat], first: bool) {
+    use crate::report::Aggregate;
+    for s in step {
+        match into.iter_mut().find(|t| t.path == s.path) {
+            Some(t) if !first => {
+                t.value = match s.aggregate {
+                    Aggregate::Last => s.value,
+                    Aggregate::Sum => t.value + s.value,
+                    Aggregate::Max => t.value.max(s.value),
+                }
+            }
+            Some(t) => *t = *s,
+            None => into.push(*s),
+        }
+    }
+}
+
+/// Writes the frame's whole stats list ([`Frame::stats`]) from its counters, the solver's own
+/// stats, the step time, the dropped-frame count and the parameters in force: the one list the
+/// logger plots and the bench reads.
+pub fn fill_stats(frame: &mut Frame, params: &crate::style::SimParams) {
+    use crate::report::paths as p;
+    use crate::report::{Aggregate, Stat};
+    let c = &frame.counters;
+    let st = &mut frame.stats;
+    st.clear();
+    let mut push = |path: &'static str, value: f64| {
+        st.push(Stat {
+            path,
+            value,
+            aggregate: Aggregate::Last,
+        })
+    };
+    for l in 0..(frame.levels as usize).min(p::ACTIVE_LEVEL_PATHS.len()) {
+        let v = c.active_per_level.get(l).copied().unwrap_or(0);
+        push(p::ACTIVE_LEVEL_PATHS[l], v as f64);
+    }
+    push(p::SPLITS, frame.splits as f64);
+    push(p::MERGES, frame.merges as f64);
+    push(p::PAIRS_TESTED, c.pairs_tested as f64);
+    push(p::PAIRS_IN_CONTACT, c.pairs_in_contact as f64);
+    push(p::BODY_CONTACTS, c.body_contacts as f64);
+    push(p::KINETIC_ENERGY, c.kinetic_energy);
+    for s in &frame.solver_stats {
+        // A solver stat of a common name replaces the common value.
+        match st.iter_mut().find(|t| t.path == s.path) {
+            Some(t) => t.value = s.value,
+            None => st.push(*s),
+        }
+    }
+    let mut push = |path: &'static str, value: f64| {
+        st.push(Stat {
+            path,
+            value,
+            aggregate: Aggregate::Last,
+        })
+    };
+    push(p::STEP_MS, frame.step_ms);
+    push(p::DROPPED_FRAMES, frame.dropped_frames as f64);
+    push(p::SPLIT_THRESHOLD, params.split_threshold);
+    push(p::MERGE_VELOCITY, params.merge_velocity);
+}

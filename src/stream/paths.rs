@@ -1,0 +1,51 @@
+//! Entity paths and timelines: the recording's interface (see the module docs of `stream`).
+//! The stat paths are defined once, in [`crate::report::paths`]; the solvers set them.
+
+pub use crate::report::paths::{
+    BODY_CONTACTS, DROPPED_FRAMES, KINETIC_ENERGY, MERGES as STAT_MERGES, MERGE_VELOCITY,
+    PAIRS_IN_CONTACT, PAIRS_TESTED, SPLITS as STAT_SPLITS, SPLIT_THRESHOLD, STEP_MS,
+};
+
+/// The AWT's active nodes (a solver's nodes are at [`nodes`]).
+pub const NODES: &str = "/hair/awt/nodes";
+/// The AWT's active segments.
+pub const SEGMENTS: &str = "/hair/awt/segments";
+/// The drawn hair strands.
+pub const STRANDS: &str = "/hair/strands";
+/// The body's collision spheres.
+pub const BODY_SPHERES: &str = "/body/spheres";
+/// The scalp ellipsoid.
+pub const SCALP: &str = "/head/scalp";
+/// Split events (`/events/<kind>` for every [`crate::report::EventKind`]).
+pub const SPLITS: &str = "/events/split";
+/// Merge events.
+pub const MERGES: &str = "/events/merge";
+/// Free-text messages.
+pub const LOG: &str = "/log";
+/// Per-level counts live below this: `/stats/active_nodes/level_N`.
+pub const ACTIVE_NODES: &str = "/stats/active_nodes";
+
+/// `/stats/active_nodes/level_N`.
+pub fn active_nodes_level(level: usize) -> String {
+    format!("{ACTIVE_NODES}/level_{level}")
+}
+
+/// A solver's nodes: `/hair/<solver>/nodes` (`/hair/awt/nodes` for the AWT).
+pub fn nodes(solver: &str) -> String {
+    format!("/hair/{solver}/nodes")
+}
+
+/// A solver's segments: `/hair/<solver>/segments`.
+pub fn segments(solver: &str) -> String {
+    format!("/hair/{solver}/segments")
+}
+
+/// Events of one kind: `/events/<kind>`.
+pub fn events(kind: crate::report::EventKind) -> String {
+    format!("/events/{}", kind.name())
+}
+
+/// The `frame` timeline (sequence: frame number).
+pub const TIMELINE_FRAME: &str = "frame";
+/// The `sim_time` timeline (duration: simulated seconds).
+pub const TIMELINE_SIM_TIME: &str = "sim_time";

@@ -1,0 +1,319 @@
+//! Where a recording goes: a spawned or running viewer (live), a `.rrd` file, standard output,
+//! or memory (tests). Opening one is the only place, with the [`crate::stream::Logger`], that
+//! names Rerun types.
+
+use std::net::{SocketAddr, TcpStream};
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Stdio};
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+use anyhow::Context as _;
+use rerun::sink::{GrpcSink, GrpcSinkConnectionState, LogSink, SinkFlushError};
+use rerun::RecordingStream;
+
+/// The file written when no viewer can be spawned and no sink is asked for.
+pub const DEFAULT_RRD: &str = "wisptree.rrd";
+/// The URL `--connect` uses without one.
+pub const DEFAULT_CONNECT_URL: &str = rerun::DEFAULT_CONNECT_URL;
+/// The application id of every recording.
+pub const APP_ID: &str = "wisptree";
+/// The port a spawned viewer listens on (Rerun's default).
+const VIEWER_PORT: u16 = 9876;
+/// How long a spawned viewer may take to listen before it is given up and the run records to
+/// a file instead (a viewer that cannot open a window dies within a second or two).
+pub const VIEWER_START_TIMEOUT: Duration = Duration::from_secs(5);
+
+/// Which sink the user asked for (at most one; `Auto` is none).
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub enum SinkChoice {
+    /// A spawned viewer if `rerun` is on PATH and starts, else [`DEFAULT_RRD`].
+    #[default]
+    Auto,
+    /// A spawned viewer, or an error.
+    Spawn,
+    /// A running viewer at this URL.
+    Connect(String),
+    /// A `.rrd` file.
+    Save(PathBuf),
+    /// Standard output (`wisptree -o | rerun -`).
+    Stdout,
+}
+
+/// Whether a live viewer is still there.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum ViewerStatus {
+    /// Not a live sink, or connected.
+    Fine,
+    /// Still connecting, for this long.
+    Connecting(Duration),
+    /// Gone, and why.
+    Gone(String),
+}
+
+/// A gRPC sink whose connection state stays observable after the recording stream took it: the
+/// stream gets one handle, the run keeps another to notice a viewer that went away.
+struct WatchedGrpcSink(Arc<GrpcSink>);
+
+impl LogSink for WatchedGrpcSink {
+    fn send(&self, msg: rerun::log::LogMsg) {
+        self.0.send(msg);
+    }
+    fn flush_blocking(&self, timeout: Duration) -> Result<(), SinkFlushError> {
+        self.0.flush_blocking(timeout)
+    }
+    fn default_batcher_config(&self) -> rerun::log::ChunkBatcherConfig {
+        self.0.default_batcher_config()
+    }
+}
+
+/// An opened recording and what kind of destination it is.
+pub struct OpenSink {
+    /// The stream the logger writes to.
+    pub rec: Recording,
+    /// A viewer is watching: pace to wall-clock time, drop frames rather than fall behind.
+    pub live: bool,
+    /// The file recorded to, if any.
+    pub file: Option<PathBuf>,
+    /// For the terminal: "viewer at …", "file …", "standard output".
+    pub description: String,
+    /// No sink was asked for and no viewer could be started: the default file was chosen.
+    pub fell_back: bool,
+    /// Connection state of a live viewer.
+    grpc: Option<Arc<GrpcSink>>,
+}
+
+/// A recording stream, opaque outside `stream`.
+#[derive(Clone)]
+pub struct Recording(pub RecordingStream);
+
+impl Recording {
+    /// A recording kept in memory (tests decode it with [`Recording::memory_bytes`]).
+    pub fn memory() -> anyhow::Result<(Recording, MemoryRecording)> {
+        let (rec, storage) = rerun::RecordingStreamBuilder::new(APP_ID)
+            .memory()
+            .context("creating an in-memory recording")?;
+        Ok((Recording(rec), MemoryRecording(storage)))
+    }
+
+    /// The Rerun stream itself (for tests and tools that log more).
+    pub fn stream(&self) -> &RecordingStream {
+        &self.0
+    }
+}
+
+/// The contents of an in-memory recording.
+pub struct MemoryRecording(pub rerun::sink::MemorySinkStorage);
+
+impl OpenSink {
+    /// A sink of an already opened recording (no viewer to watch, no file to report).
+    pub fn recording(rec: Recording) -> OpenSink {
+        OpenSink {
+            rec,
+            live: false,
+            file: None,
+            description: "recording".to_owned(),
+            fell_back: false,
+            grpc: None,
+        }
+    }
+
+    /// The live viewer's state (always `Fine` for a file or standard output).
+    pub fn viewer_status(&self) -> ViewerStatus {
+        match self.grpc.as_ref().map(|g| g.status()) {
+            None | Some(GrpcSinkConnectionState::Connected) => ViewerStatus::Fine,
+            Some(GrpcSinkConnectionState::Connecting { started }) => {
+                ViewerStatus::Connecting(started.elapsed())
+            }
+            Some(GrpcSinkConnectionState::Disconnected(r)) => ViewerStatus::Gone(match r {
+                Ok(()) => "the viewer closed the connection".to_owned(),
+                Err(e) => format!("the viewer went away (connection lost: {e:?})"),
+            }),
+        }
+    }
+
+    /// A handle that tells the viewer's state from another place than the sink's owner.
+    pub fn watcher(&self) -> SinkWatcher {
+        SinkWatcher(self.grpc.clone())
+    }
+}
+
+/// Tells whether a live viewer is still there (see [`OpenSink::watcher`]).
+#[derive(Clone)]
+pub struct SinkWatcher(Option<Arc<GrpcSink>>);
+
+impl SinkWatcher {
+    /// As [`OpenSink::viewer_status`].
+    pub fn status(&self) -> ViewerStatus {
+        OpenSink {
+            rec: Recording(RecordingStream::disabled()),
+            live: false,
+            file: None,
+            description: String::new(),
+            fell_back: false,
+            grpc: self.0.clone(),
+        }
+        .viewer_status()
+    }
+}
+
+fn connect(url: &str) -> anyhow::Result<(RecordingStream, Arc<GrpcSink>)> {
+    let uri: rerun::external::re_uri::ProxyUri = url.parse().map_err(|e| {
+        crate::error::BadInput(format!(
+            "--connect {url}: not a Rerun proxy URL ({e}); expected e.g. {DEFAULT_CONNECT_URL}"
+        ))
+    })?;
+    let sink = Arc::new(GrpcSink::new(uri));
+    let (enabled, store_info, recording_info, batcher_config, hooks, _blueprint) =
+        rerun::RecordingStreamBuilder::new(APP_ID).into_args();
+    let rec = if enabled {
+        RecordingStream::new(
+            store_info,
+            recording_info,
+            batcher_config,
+            hooks,
+            Box::new(WatchedGrpcSink(sink.clone())),
+        )
+        .context("creating the recording stream")?
+    } else {
+        RecordingStream::disabled()
+    };
+    Ok((rec, sink))
+}
+
+fn save(path: &Path) -> anyhow::Result<RecordingStream> {
+    rerun::RecordingStreamBuilder::new(APP_ID)
+        .save(path)
+        .with_context(|| format!("{}: cannot create the recording", path.display()))
+}
+
+/// The version of the Rerun SDK (the viewer should match it).
+pub fn rerun_version() -> String {
+    rerun::build_info().version.to_string()
+}
+
+/// Opens the sink asked for; with [`SinkChoice::Auto`], a spawned viewer or else the default
+/// file [`DEFAULT_RRD`] in the current directory.
+pub fn open_sink(choice: &SinkChoice) -> anyhow::Result<OpenSink> {
+    let plain = |rec, file: Option<PathBuf>, description| OpenSink {
+        rec: Recording(rec),
+        live: false,
+        file,
+        description,
+        fell_back: false,
+        grpc: None,
+    };
+    let live = |rec, grpc, description| OpenSink {
+        rec: Recording(rec),
+        live: true,
+        file: None,
+        description,
+        fell_back: false,
+        grpc: Some(grpc),
+    };
+    match choice {
+        SinkChoice::Stdout => {
+            let rec = rerun::RecordingStreamBuilder::new(APP_ID)
+                .stdout()
+                .context("opening standard output for the recording")?;
+            Ok(plain(rec, None, "standard output".to_owned()))
+        }
+        SinkChoice::Save(path) => Ok(plain(
+            save(path)?,
+            Some(path.clone()),
+            format!("file {}", path.display()),
+        )),
+        SinkChoice::Connect(url) => {
+            let (rec, grpc) = connect(url)?;
+            Ok(live(rec, grpc, format!("viewer at {url}")))
+        }
+        SinkChoice::Spawn | SinkChoice::Auto => match start_viewer() {
+            Ok((url, what)) => {
+                let (rec, grpc) = connect(&url)?;
+                Ok(live(rec, grpc, format!("{what} at {url}")))
+            }
+            Err(why) if *choice == SinkChoice::Spawn => Err(anyhow::anyhow!("--spawn: {why}")),
+            Err(why) => {
+                let path = PathBuf::from(DEFAULT_RRD);
+                let mut s = plain(
+                    save(&path)?,
+                    Some(path.clone()),
+                    format!("file {} ({why})", path.display()),
+                );
+                s.fell_back = true;
+                Ok(s)
+            }
+        },
+    }
+}
+
+/// Starts a viewer (`rerun` on PATH) listening on the default port, or finds one already
+/// there, and waits until it listens. Returns its URL and how it was found, or why there is
+/// none. A viewer that exits, or does not listen within [`VIEWER_START_TIMEOUT`] (no display,
+/// say), is stopped and reaped.
+fn start_viewer() -> Result<(String, &'static str), String> {
+    let addr = SocketAddr::from(([127, 0, 0, 1], VIEWER_PORT));
+    let url = format!("rerun+http://127.0.0.1:{VIEWER_PORT}/proxy");
+    if TcpStream::connect_timeout(&addr, Duration::from_millis(300)).is_ok() {
+        return Ok((url, "viewer already running"));
+    }
+    let mut child = spawn_viewer_process()?;
+    let started = Instant::now();
+    let mut exited: Option<std::process::ExitStatus> = None;
+    loop {
+        if TcpStream::connect_timeout(&addr, Duration::from_millis(200)).is_ok() {
+            // (The launcher may fork the viewer and exit; the port is what counts. A child
+            // that is still running is the viewer itself and outlives the run.)
+            return Ok((url, "spawned viewer"));
+        }
+        if exited.is_none() {
+            exited = child.try_wait().ok().flatten();
+        }
+        let waited = started.elapsed();
+        match exited {
+            // An unsuccessful exit: it will never listen.
+            Some(st) if !st.success() => {
+                return Err(format!(
+                    "the Rerun viewer exited at once ({st}); no display?"
+                ))
+            }
+            _ if waited >= VIEWER_START_TIMEOUT => {
+                stop_process_group(&mut child);
+                return Err(format!(
+                    "the Rerun viewer did not start listening within {} s; no display?",
+                    VIEWER_START_TIMEOUT.as_secs()
+                ));
+            }
+            _ => std::thread::sleep(Duration::from_millis(100)),
+        }
+    }
+}
+
+/// `rerun --port 9876 …` as Rerun's own `spawn` runs it, in its own process group so that it
+/// can be stopped with whatever it forked.
+fn spawn_viewer_process() -> Result<Child, String> {
+    use std::os::unix::process::CommandExt as _;
+    Command::new("rerun")
+        .stdin(Stdio::null())
+        .arg(format!("--port={VIEWER_PORT}"))
+        .arg("--memory-limit=75%")
+        .arg("--expect-data-soon")
+        .process_group(0)
+        .spawn()
+        .map_err(|e| match e.kind() {
+            std::io::ErrorKind::NotFound => "no Rerun viewer (`rerun`) on PATH".to_owned(),
+            _ => format!("could not start a Rerun viewer ({e})"),
+        })
+}
+
+/// Stops a viewer that never listened, and whatever it forked, and reaps it.
+fn stop_process_group(child: &mut Child) {
+    // SIGKILL to the whole group: the child leads it (`process_group(0)`).
+    let _ = Command::new("kill")
+        .arg("-KILL")
+        .arg(format!("-{}", child.id()))
+        .stderr(Stdio::null())
+        .status();
+    let _ = child.kill();
+    let _ = child.wait();
+}
