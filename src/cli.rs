@@ -36,6 +36,8 @@ pub enum Command {
     /// Reproduce the AWT paper's §5.2 timing table: single-level against AWT on the four paper
     /// styles under the `lean` motion.
     Bench(crate::bench::BenchArgs),
+    /// Simulate and write every n-th frame's strands as `.hair` or `.tfx` files.
+    Export(crate::export::ExportArgs),
 }
 
 #[derive(Debug, clap::Args)]
@@ -59,6 +61,7 @@ pub fn main() -> i32 {
         Some(Command::Inspect(a)) => inspect(&a),
         Some(Command::Run(a)) => crate::run::run(a),
         Some(Command::Bench(a)) => crate::bench::run(a),
+        Some(Command::Export(a)) => crate::export::run(a),
         None => crate::run::run(cli.run),
     };
     match result {
@@ -122,6 +125,10 @@ pub fn summarize(loaded: &style::LoadedStyle, m: &HairModel) -> ModelSummary {
 
 fn inspect(a: &InspectArgs) -> anyhow::Result<()> {
     let (loaded, model) = load_model(&a.style)?;
+    model
+        .notes
+        .iter()
+        .for_each(|n| eprintln!("wisptree: note: {n}"));
     let s = summarize(&loaded, &model);
     if a.json {
         println!("{}", serde_json::to_string_pretty(&s)?);

@@ -13,6 +13,7 @@
 pub mod bench;
 pub mod cli;
 pub mod experiment;
+pub mod export;
 pub mod frame;
 pub mod model;
 pub mod motion;
