@@ -506,6 +506,9 @@ pub fn run_with(args: RunArgs, stop: StopSignal) -> anyhow::Result<RunSummary> {
         setup.motion.name(),
         sink.description
     ));
+    for n in &setup.model.notes {
+        console.say(&format!("wisptree: note: {n}"));
+    }
     match seconds {
         _ if sink.fell_back => {}
         Some(s) => console.say(&format!("simulating {s} s")),

@@ -50,9 +50,9 @@ fn spec_hair(strands: &[Vec<[f32; 3]>], a: Arrays, info: &[u8]) -> Vec<u8> {
     let points: usize = strands.iter().map(Vec::len).sum();
     let flags = (a.segments as u32)
         | 2
-        | (a.thickness as u32) << 2
-        | (a.transparency as u32) << 3
-        | (a.color as u32) << 4;
+        | ((a.thickness as u32) << 2)
+        | ((a.transparency as u32) << 3)
+        | ((a.color as u32) << 4);
     let mut b = b"HAIR".to_vec();
     le32(&mut b, strands.len() as u32);
     le32(&mut b, points as u32);
@@ -685,7 +685,7 @@ fn corrupt_files_exit_2_with_the_byte_offset() {
 }
 
 #[test]
-fn inspect_says_how_many_strands_were_skipped() {
+fn inspect_and_run_say_how_many_strands_were_skipped() {
     let truth = hanging(&[1, 8, 1, 5, 6, 4], [0.0, 1.6, 0.0], 0.09);
     let f32s: Vec<Vec<[f32; 3]>> = truth
         .iter()
@@ -700,6 +700,23 @@ fn inspect_says_how_many_strands_were_skipped() {
     );
     let (code, err) = inspect(&style);
     assert_eq!(code, 0, "{err}");
+    assert!(err.contains("skipped 2 one-point strand"), "{err}");
+    // `run` says it too.
+    let rrd = dir.path().join("n.rrd").to_string_lossy().into_owned();
+    let out = Command::new(env!("CARGO_BIN_EXE_wisptree"))
+        .args([
+            "run",
+            "--style",
+            &style,
+            "--save",
+            &rrd,
+            "--seconds",
+            "0.04",
+        ])
+        .output()
+        .expect("the binary runs");
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{err}");
     assert!(err.contains("skipped 2 one-point strand"), "{err}");
 }
 
