@@ -77,7 +77,7 @@ pub fn load_hair(path: &Path) -> Result<HairFile, StyleError> {
 
 /// Parses the bytes of a `.hair` file; `path` only names the file in errors.
 pub fn parse_hair(path: &Path, bytes: &[u8]) -> Result<HairFile, StyleError> {
-    let err = |msg: String| StyleError::Tfx {
+    let err = |msg: String| StyleError::StrandFile {
         path: path.to_path_buf(),
         msg,
     };
@@ -121,69 +121,24 @@ pub fn parse_hair(path: &Path, bytes: &[u8]) -> Result<HairFile, StyleError> {
     }
     check_defaults(flags, &defaults).map_err(err)?;
 
-    // Segments: from the array, or the default for every strand.
-    let mut at = HEADER;
-    let mut lengths: Vec<usize> = Vec::new();
-    if flags & SEGMENTS_BIT != 0 {
-        let end = array_end(bytes.len(), at, strands, 2, "segments", "strands").map_err(err)?;
-        lengths.reserve_exact(strands);
-        lengths.extend(bytes[at..end].chunks_exact(2).map(|c| {
-            // Segments + 1 points; a u16 + 1 always fits.
-            u16::from_le_bytes([c[0], c[1]]) as usize + 1
-        }));
-        at = end;
-        let sum: usize = lengths.iter().sum();
-        if sum != points {
-            return Err(err(format!(
-                "counts do not add up: the segments array (bytes {HEADER}..{at}) gives {sum} \
-                 points, the header (byte 8) says {points}"
-            )));
-        }
-    } else {
-        let per = defaults.segments as usize + 1;
-        if strands.checked_mul(per) != Some(points) {
-            return Err(err(format!(
-                "counts do not add up: {strands} strands (byte 4) × {per} points (default \
-                 segments {} at byte 16, + 1) is not the {points} points of byte 8",
-                defaults.segments
-            )));
-        }
-    }
-
+    let (lengths, mut at) =
+        strand_lengths(bytes, flags, strands, points, defaults.segments).map_err(err)?;
     let end = array_end(bytes.len(), at, points, 12, "points", "points").map_err(err)?;
     let positions = read_points(&bytes[at..end], at, &lengths, strands, points).map_err(err)?;
     at = end;
 
-    let mut floats = |bit: u32, name: &str, width: usize| -> Result<Option<Vec<f32>>, StyleError> {
+    let mut optional = |bit: u32, name: &str, width: usize| {
         if flags & bit == 0 {
             return Ok(None);
         }
-        let end = array_end(bytes.len(), at, points, 4 * width, name, "points").map_err(err)?;
-        let start = at;
-        let mut out = Vec::with_capacity(points * width);
-        for (i, c) in bytes[start..end].chunks_exact(4).enumerate() {
-            let v = f32::from_le_bytes([c[0], c[1], c[2], c[3]]);
-            let bad = !v.is_finite() || (bit == THICKNESS_BIT && v < 0.0);
-            if bad {
-                return Err(err(format!(
-                    "byte {}: {name} of point {} is {v}, expected a finite{} number",
-                    start + 4 * i,
-                    i / width,
-                    if bit == THICKNESS_BIT {
-                        ", non-negative"
-                    } else {
-                        ""
-                    }
-                )));
-            }
-            out.push(v);
-        }
+        let (values, end) =
+            float_array(bytes, at, points, width, name, bit == THICKNESS_BIT).map_err(err)?;
         at = end;
-        Ok(Some(out))
+        Ok::<_, StyleError>(Some(values))
     };
-    let thickness = floats(THICKNESS_BIT, "thickness", 1)?;
-    let transparency = floats(TRANSPARENCY_BIT, "transparency", 1)?;
-    let colors = floats(COLOR_BIT, "colour", 3)?
+    let thickness = optional(THICKNESS_BIT, "thickness", 1)?;
+    let transparency = optional(TRANSPARENCY_BIT, "transparency", 1)?;
+    let colors = optional(COLOR_BIT, "colour", 3)?
         .map(|c| c.chunks_exact(3).map(|v| [v[0], v[1], v[2]]).collect());
     if at != bytes.len() {
         return Err(err(format!(
@@ -202,6 +157,69 @@ pub fn parse_hair(path: &Path, bytes: &[u8]) -> Result<HairFile, StyleError> {
         defaults,
         info: String::from_utf8_lossy(&info_bytes[..info_len]).into_owned(),
     })
+}
+
+/// Points per strand, from the segments array or the default segments, checked against the
+/// header's point count; and the byte where the points array starts.
+fn strand_lengths(
+    bytes: &[u8],
+    flags: u32,
+    strands: usize,
+    points: usize,
+    default_segments: u32,
+) -> Result<(Vec<usize>, usize), String> {
+    if flags & SEGMENTS_BIT == 0 {
+        let per = default_segments as usize + 1;
+        if strands.checked_mul(per) != Some(points) {
+            return Err(format!(
+                "counts do not add up: {strands} strands (byte 4) × {per} points (default \
+                 segments {default_segments} at byte 16, + 1) is not the {points} points of byte 8"
+            ));
+        }
+        // Every strand has `per` points: no array needed.
+        return Ok((Vec::new(), HEADER));
+    }
+    let end = array_end(bytes.len(), HEADER, strands, 2, "segments", "strands")?;
+    // Segments + 1 points; a u16 + 1 always fits.
+    let lengths: Vec<usize> = bytes[HEADER..end]
+        .chunks_exact(2)
+        .map(|c| u16::from_le_bytes([c[0], c[1]]) as usize + 1)
+        .collect();
+    let sum: usize = lengths.iter().sum();
+    if sum != points {
+        return Err(format!(
+            "counts do not add up: the segments array (bytes {HEADER}..{end}) gives {sum} \
+             points, the header (byte 8) says {points}"
+        ));
+    }
+    Ok((lengths, end))
+}
+
+/// An optional per-point array of `width` f32 per point starting at byte `at`: its values
+/// (finite, and non-negative if `non_negative`) and the byte after it.
+fn float_array(
+    bytes: &[u8],
+    at: usize,
+    points: usize,
+    width: usize,
+    name: &str,
+    non_negative: bool,
+) -> Result<(Vec<f32>, usize), String> {
+    let end = array_end(bytes.len(), at, points, 4 * width, name, "points")?;
+    let mut out = Vec::with_capacity(points * width);
+    for (i, c) in bytes[at..end].chunks_exact(4).enumerate() {
+        let v = f32::from_le_bytes([c[0], c[1], c[2], c[3]]);
+        if !v.is_finite() || (non_negative && v < 0.0) {
+            return Err(format!(
+                "byte {}: {name} of point {} is {v}, expected a finite{} number",
+                at + 4 * i,
+                i / width,
+                if non_negative { ", non-negative" } else { "" }
+            ));
+        }
+        out.push(v);
+    }
+    Ok((out, end))
 }
 
 /// The defaults a file relies on (its optional arrays are absent) must be usable numbers.

@@ -32,7 +32,7 @@ pub fn load_hairsalon(path: &Path) -> Result<HairSalonFile, StyleError> {
 
 /// Parses the bytes of a `.data` file; `path` only names the file in errors.
 pub fn parse_hairsalon(path: &Path, bytes: &[u8]) -> Result<HairSalonFile, StyleError> {
-    let err = |msg: String| StyleError::Tfx {
+    let err = |msg: String| StyleError::StrandFile {
         path: path.to_path_buf(),
         msg,
     };

@@ -1,7 +1,7 @@
 //! Hairstyle files: parsing, validation, and turning a style into raw strands.
 //!
 //! `load` reads and validates a `.ron` file; `LoadedStyle::strands` generates (seed 004) or
-//! imports (TressFX) the strands that the multiresolution model (`crate::model`) is built from.
+//! imports (TressFX `.tfx`, Cem Yuksel `.hair`, USC-HairSalon `.data`) the strands that the multiresolution model (`crate::model`) is built from.
 
 pub mod builtin;
 pub mod generate;
@@ -47,6 +47,9 @@ pub enum StyleError {
     },
     #[error("{path}: {msg}")]
     Tfx { path: PathBuf, msg: String },
+    /// A corrupt `.hair` or `.data` strand file; the message names the byte offset.
+    #[error("{path}: {msg}")]
+    StrandFile { path: PathBuf, msg: String },
 }
 
 /// A parsed, validated style and where it came from (relative paths inside it are resolved

@@ -23,7 +23,8 @@ pub struct Style {
     /// The head and body in the rest pose. Default: [`Head::default`].
     #[serde(default)]
     pub head: Head,
-    /// The strands: generated from wisps, or imported from TressFX files. Required.
+    /// The strands: generated from wisps, or imported from TressFX, `.hair` or HairSalon files.
+    /// Required.
     pub hair: Hair,
     /// The multiresolution structure. Default: [`Hierarchy::default`].
     #[serde(default)]

@@ -135,7 +135,7 @@ pub fn bits(s: &[Vec<[f32; 3]>]) -> Vec<Vec<[u32; 3]>> {
 /// The message of a file error, or a test failure naming what came instead.
 pub fn msg<T: std::fmt::Debug>(r: Result<T, StyleError>) -> String {
     match r {
-        Err(StyleError::Tfx { msg, .. }) => msg,
+        Err(StyleError::StrandFile { msg, .. }) => msg,
         other => panic!("expected a file error, got {other:?}"),
     }
 }
