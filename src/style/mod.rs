@@ -1,7 +1,8 @@
 //! Hairstyle files: parsing, validation, and turning a style into raw strands.
 //!
 //! `load` reads and validates a `.ron` file; `LoadedStyle::strands` generates (seed 004) or
-//! imports (TressFX `.tfx`, Cem Yuksel `.hair`, USC-HairSalon `.data`) the strands that the multiresolution model (`crate::model`) is built from.
+//! imports (TressFX `.tfx`, Cem Yuksel `.hair`, USC-HairSalon `.data`) the strands that the
+//! multiresolution model (`crate::model`) is built from.
 
 pub mod builtin;
 pub mod generate;
