@@ -134,7 +134,7 @@ pub fn parse(path: &Path, text: &str) -> Result<LoadedStyle, StyleError> {
             .strands()?
             .strands
             .iter()
-            .map(|s| s.points[0])
+            .filter_map(|s| s.points.first().copied())
             .collect();
         let sphere =
             import::fit_head_sphere(&roots).map_err(|msg| invalid("head.fit_body", msg))?;
