@@ -88,6 +88,8 @@ pub struct HairModel {
     pub scalp_center: Vector3<f64>,
     pub scalp_radii: Vector3<f64>,
     pub body: Vec<Sphere>,
+    /// What the import had to tell the user (skipped strands), from [`RawHair::notes`].
+    pub notes: Vec<String>,
 }
 
 impl HairModel {
@@ -314,6 +316,7 @@ impl HairModel {
             scalp_center: Vector3::from(s.head.scalp.center),
             scalp_radii: Vector3::from(s.head.scalp.radii),
             body: style.body.clone(),
+            notes: hair.notes.clone(),
         }
     }
 

@@ -1,6 +1,8 @@
-//! The threads: `wisptree run` (simulation and logging threads, keys, style reload, stop).
+//! The commands that run a simulation: `wisptree run` (simulation and logging threads, keys,
+//! style reload, stop) and `wisptree export`.
 
 mod console;
+pub mod export;
 mod log_thread;
 mod reload;
 pub mod run;

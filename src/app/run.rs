@@ -113,6 +113,9 @@ pub fn run_with(opts: RunOptions, stop: StopSignal) -> anyhow::Result<RunSummary
     // Load first: a bad style must not leave an empty recording or a spawned viewer behind.
     let scene = Scene::load(&opts.style, &opts.motion, opts.model)?;
     let console = Console::default();
+    for n in &scene.model.notes {
+        console.say(&format!("wisptree: note: {n}"));
+    }
     for w in scene.warnings() {
         console.say(&format!("warning: {w}"));
     }

@@ -58,6 +58,9 @@ pub fn summarize(loaded: &style::LoadedStyle, m: &HairModel) -> ModelSummary {
 pub fn inspect(a: &InspectArgs) -> anyhow::Result<()> {
     let source = StyleSource::parse(&a.style);
     let (loaded, model) = crate::scene::load_model(&source)?;
+    for n in &model.notes {
+        eprintln!("wisptree: note: {n}");
+    }
     for w in crate::scene::warnings(&model) {
         eprintln!("warning: {w}");
     }

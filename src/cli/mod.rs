@@ -4,6 +4,7 @@
 
 mod args;
 mod bench_args;
+mod export_args;
 mod inspect;
 mod styles;
 
@@ -11,6 +12,7 @@ use clap::{Parser, Subcommand};
 
 pub use args::{RunArgs, SinkArgs};
 pub use bench_args::BenchArgs;
+pub use export_args::ExportArgs;
 pub use inspect::{summarize, InspectArgs, ModelSummary};
 pub use styles::StylesArgs;
 
@@ -47,6 +49,8 @@ pub enum Command {
     /// Reproduce the AWT paper's §5.2 timing table (single-level against AWT on the four paper
     /// styles under the `lean` motion), and time other solvers with --solvers.
     Bench(BenchArgs),
+    /// Simulate and write every n-th frame's strands as `.hair` or `.tfx` files.
+    Export(ExportArgs),
 }
 
 /// Runs the command line; returns the process exit code.
@@ -57,6 +61,7 @@ pub fn main() -> i32 {
         Some(Command::Styles(a)) => styles::styles(&a),
         Some(Command::Run(a)) => crate::app::run(a.options()),
         Some(Command::Bench(a)) => a.options().and_then(|o| crate::bench::run(&o)),
+        Some(Command::Export(a)) => crate::app::export::run(&a.options(), !a.no_progress),
         None => crate::app::run(cli.run.options()),
     };
     match result {

@@ -1,12 +1,17 @@
 //! Hairstyle files: parsing, validation, and turning a style into raw strands.
 //!
 //! `load` reads and validates a `.ron` file; `LoadedStyle::strands` generates (seed 004) or
-//! imports (TressFX) the strands that the multiresolution model (`crate::model`) is built from.
+//! imports (TressFX `.tfx`, Cem Yuksel `.hair`, USC-HairSalon `.data`) the strands that the
+//! multiresolution model (`crate::model`) is built from.
 
 pub mod builtin;
 pub mod generate;
+pub mod hair_file;
+pub mod hairsalon;
+pub mod import;
 pub mod schema;
 pub mod tfx;
+pub mod tfx_write;
 
 use std::path::{Path, PathBuf};
 
@@ -43,6 +48,9 @@ pub enum StyleError {
     },
     #[error("{path}: {msg}")]
     Tfx { path: PathBuf, msg: String },
+    /// A corrupt `.hair` or `.data` strand file; the message names the byte offset.
+    #[error("{path}: {msg}")]
+    StrandFile { path: PathBuf, msg: String },
 }
 
 /// A parsed, validated style and where it came from (relative paths inside it are resolved
@@ -68,6 +76,8 @@ pub struct RawStrand {
 pub struct RawHair {
     pub wisp_names: Vec<String>,
     pub strands: Vec<RawStrand>,
+    /// What the user should be told about the import (strands skipped, and why).
+    pub notes: Vec<String>,
 }
 
 /// Reads, parses and validates a style file.
@@ -110,13 +120,27 @@ pub fn parse(path: &Path, text: &str) -> Result<LoadedStyle, StyleError> {
             }
             None => style.head.body.clone(),
         },
-        Hair::Generated(_) => style.head.body.clone(),
+        Hair::Generated(_) | Hair::HairFile(_) | Hair::HairSalon(_) => style.head.body.clone(),
     };
-    Ok(LoadedStyle {
+    let mut loaded = LoadedStyle {
         path: path.to_path_buf(),
         style,
         body,
-    })
+    };
+    if loaded.style.head.fit_body {
+        // The roots are only known once the strands are read (a second read, when the model is
+        // built: styles stay plain data, with no strands cached in them).
+        let roots: Vec<[f64; 3]> = loaded
+            .strands()?
+            .strands
+            .iter()
+            .filter_map(|s| s.points.first().copied())
+            .collect();
+        let sphere =
+            import::fit_head_sphere(&roots).map_err(|msg| invalid("head.fit_body", msg))?;
+        loaded.body = vec![sphere];
+    }
+    Ok(loaded)
 }
 
 /// Resolves a path written in a style file against the style file's folder.
@@ -162,6 +186,34 @@ impl LoadedStyle {
                             .collect();
                         hair.strands.push(RawStrand { wisp: 0, points });
                     }
+                }
+                Ok(hair)
+            }
+            Hair::HairFile(f) => {
+                let file = hair_file::load_hair(&resolve(&self.path, &f.file))?;
+                let mut hair = RawHair::default();
+                let skipped = import::append_strands(f, &file.strands, &mut hair);
+                if skipped > 0 {
+                    hair.notes.push(format!(
+                        "{}: skipped {skipped} one-point strand(s) of {} (a strand needs a root \
+                         and a tip)",
+                        f.file,
+                        file.strands.len()
+                    ));
+                }
+                Ok(hair)
+            }
+            Hair::HairSalon(f) => {
+                let file = hairsalon::load_hairsalon(&resolve(&self.path, &f.file))?;
+                let mut hair = RawHair::default();
+                import::append_strands(f, &file.strands, &mut hair);
+                if file.skipped_one_point > 0 {
+                    hair.notes.push(format!(
+                        "{}: skipped {} one-point strand(s) (roots with no hair) of {}",
+                        f.file,
+                        file.skipped_one_point,
+                        file.skipped_one_point + file.strands.len()
+                    ));
                 }
                 Ok(hair)
             }
@@ -396,6 +448,18 @@ pub fn validate(style: &Style) -> Result<(), Invalid> {
             })?;
             positive(t.scale, "hair.scale")?;
             finite3(&t.translate, "hair.translate")?;
+            check(
+                !(style.head.fit_body && t.project.is_some()),
+                "head.fit_body",
+                || "conflicts with hair.project, which gives the collision spheres".into(),
+            )?;
+        }
+        Hair::HairFile(f) | Hair::HairSalon(f) => {
+            check(!f.file.trim().is_empty(), "hair.file", || {
+                "needs the path of the strand file".into()
+            })?;
+            positive(f.scale, "hair.scale")?;
+            finite3(&f.translate, "hair.translate")?;
         }
     }
     Ok(())

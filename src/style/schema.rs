@@ -23,7 +23,8 @@ pub struct Style {
     /// The head and body in the rest pose. Default: [`Head::default`].
     #[serde(default)]
     pub head: Head,
-    /// The strands: generated from wisps, or imported from TressFX files. Required.
+    /// The strands: generated from wisps, or imported from TressFX, `.hair` or HairSalon files.
+    /// Required.
     pub hair: Hair,
     /// The multiresolution structure. Default: [`Hierarchy::default`].
     #[serde(default)]
@@ -52,6 +53,11 @@ pub struct Head {
     /// Default: a head sphere just inside the scalp, a neck and two shoulders/torso spheres.
     #[serde(default = "default_body")]
     pub body: Vec<Sphere>,
+    /// Replace `body` by one sphere fitted to the strands' roots (least squares, shrunk so
+    /// that every root lies on or outside it). For imported hair whose head is not given.
+    /// Default false.
+    #[serde(default)]
+    pub fit_body: bool,
 }
 
 impl Default for Head {
@@ -59,6 +65,7 @@ impl Default for Head {
         Head {
             scalp: default_scalp(),
             body: default_body(),
+            fit_body: false,
         }
     }
 }
@@ -122,6 +129,11 @@ pub enum Hair {
     Generated(Generated),
     /// Strands read from TressFX `.tfx` files (versions 3 and 4).
     TressFx(TressFx),
+    /// Strands read from a Cem Yuksel `.hair` file (RON name `Hair`).
+    #[serde(rename = "Hair")]
+    HairFile(StrandFile),
+    /// Strands read from a USC-HairSalon `.data` file.
+    HairSalon(StrandFile),
 }
 
 /// Generated hair: wisps on scalp regions, plus copies and mirror images of them.
@@ -248,6 +260,39 @@ pub struct TressFx {
 
 fn default_tfx_scale() -> f64 {
     0.01
+}
+
+/// Strands imported from one `.hair` or `.data` file. A point `p` of the file becomes
+/// `scale · R(up) · p + translate`, where `R(Z)` turns a z-up file to y-up.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct StrandFile {
+    /// The file, relative to the style file.
+    pub file: String,
+    /// Factor from file units to metres. Default 1.
+    #[serde(default = "default_strand_file_scale")]
+    pub scale: f64,
+    /// Translation applied after scaling, metres. Default (0, 0, 0).
+    #[serde(default)]
+    pub translate: Vec3,
+    /// Which axis is up in the file. Default `Y`.
+    #[serde(default)]
+    pub up: Up,
+}
+
+fn default_strand_file_scale() -> f64 {
+    1.0
+}
+
+/// The up axis of an imported file.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+pub enum Up {
+    /// Already y-up: points are kept as they are.
+    #[default]
+    Y,
+    /// Z-up (3ds Max, Blender): turned −90° about x, `(x, y, z) ↦ (x, z, −y)`, so that +z
+    /// becomes +y and the −y front of a z-up file faces +z as wisptree expects.
+    Z,
 }
 
 /// The multiresolution structure (AWT §2.1–2.2).
