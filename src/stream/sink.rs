@@ -309,11 +309,12 @@ fn spawn_viewer_process() -> Result<Child, String> {
 /// Stops a viewer that never listened, and whatever it forked, and reaps it.
 fn stop_process_group(child: &mut Child) {
     // SIGKILL to the whole group: the child leads it (`process_group(0)`).
-    let _ = Command::new("kill")
-        .arg("-KILL")
-        .arg(format!("-{}", child.id()))
-        .stderr(Stdio::null())
-        .status();
+    if let Ok(pgid) = libc::pid_t::try_from(child.id()) {
+        // SAFETY: killpg only sends a signal; the group is the one this process created.
+        unsafe {
+            libc::killpg(pgid, libc::SIGKILL);
+        }
+    }
     let _ = child.kill();
     let _ = child.wait();
 }

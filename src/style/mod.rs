@@ -273,6 +273,12 @@ fn finite3(v: &Vec3, field: &str) -> Result<(), Invalid> {
     })
 }
 
+/// A key strand's points are offsets from its root: more than this many metres is a typo.
+pub const MAX_KEY_OFFSET: f64 = 10.0;
+/// Tiles of one wisp: each becomes a top-level wisp. The shipped styles use at most 4; a count
+/// in the thousands is a typo that would take minutes to simulate.
+pub const MAX_TILES_PER_WISP: u64 = 256;
+
 /// Checks every value a style may get wrong; returns the dotted field path and the reason.
 pub fn validate(style: &Style) -> Result<(), Invalid> {
     let h = &style.head;
@@ -409,11 +415,25 @@ pub fn validate(style: &Style) -> Result<(), Invalid> {
                 check(w.tiles.0 >= 1 && w.tiles.1 >= 1, &f("tiles"), || {
                     format!("both tile counts must be ≥ 1, got {:?}", w.tiles)
                 })?;
+                let tiles = u64::from(w.tiles.0) * u64::from(w.tiles.1);
+                check(tiles <= MAX_TILES_PER_WISP, &f("tiles"), || {
+                    format!(
+                        "at most {MAX_TILES_PER_WISP} tiles per wisp (each tile is a top-level \
+                         wisp of the AWT), got {} × {} = {tiles}",
+                        w.tiles.0, w.tiles.1
+                    )
+                })?;
                 check(!w.key_strand.is_empty(), &f("key_strand"), || {
                     "needs at least one control point after the root".into()
                 })?;
                 for (c, p) in w.key_strand.iter().enumerate() {
-                    finite3(p, &f(&format!("key_strand[{c}]")))?;
+                    let field = f(&format!("key_strand[{c}]"));
+                    finite3(p, &field)?;
+                    check(p.iter().all(|x| x.abs() <= MAX_KEY_OFFSET), &field, || {
+                        format!(
+                            "a key-strand point must lie within {MAX_KEY_OFFSET} m of its root, got {p:?}"
+                        )
+                    })?;
                 }
                 non_negative(w.tip_spread, &f("tip_spread"))?;
                 if let Some(c) = &w.curl {
