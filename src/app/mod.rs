@@ -2,6 +2,7 @@
 //! style reload, stop) and `wisptree export`.
 
 mod console;
+pub mod experiment;
 pub mod export;
 mod log_thread;
 mod reload;

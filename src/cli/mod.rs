@@ -4,6 +4,7 @@
 
 mod args;
 mod bench_args;
+mod experiment_args;
 mod export_args;
 mod inspect;
 mod styles;
@@ -12,6 +13,7 @@ use clap::{Parser, Subcommand};
 
 pub use args::{RunArgs, SinkArgs};
 pub use bench_args::BenchArgs;
+pub use experiment_args::ExperimentArgs;
 pub use export_args::ExportArgs;
 pub use inspect::{summarize, InspectArgs, ModelSummary};
 pub use styles::StylesArgs;
@@ -51,6 +53,8 @@ pub enum Command {
     Bench(BenchArgs),
     /// Simulate and write every n-th frame's strands as `.hair` or `.tfx` files.
     Export(ExportArgs),
+    /// Run one of the papers' experiments, record it and print the number it demonstrates.
+    Experiment(ExperimentArgs),
 }
 
 /// Runs the command line; returns the process exit code.
@@ -61,6 +65,7 @@ pub fn main() -> i32 {
         Some(Command::Styles(a)) => styles::styles(&a),
         Some(Command::Run(a)) => crate::app::run(a.options()),
         Some(Command::Bench(a)) => a.options().and_then(|o| crate::bench::run(&o)),
+        Some(Command::Experiment(a)) => crate::app::experiment::run(&a.command()),
         Some(Command::Export(a)) => crate::app::export::run(&a.options(), !a.no_progress),
         None => crate::app::run(cli.run.options()),
     };

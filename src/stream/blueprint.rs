@@ -298,3 +298,50 @@ pub fn send_blueprint(
     );
     Ok(())
 }
+
+/// The layout of a recording of several runs (`/runs/<label>/…`): one 3D view per run in a
+/// grid, each showing its own subtree, above one time series overlaying every run's stats.
+pub fn runs_blueprint(labels: &[String]) -> rerun::blueprint::Blueprint {
+    use rerun::blueprint::{
+        Blueprint, ContainerLike, Grid, Spatial3DView, TimePanel, TimeSeriesView, Vertical,
+    };
+    let views: Vec<ContainerLike> = labels
+        .iter()
+        .map(|l| {
+            let origin = format!("/runs/{l}");
+            Spatial3DView::new(l.as_str())
+                .with_origin(origin.as_str())
+                .with_contents([
+                    format!("+ {origin}/hair/**"),
+                    format!("+ {origin}/body/**"),
+                    format!("+ {origin}/head/**"),
+                    format!("+ {origin}/events/**"),
+                ])
+                .into()
+        })
+        .collect();
+    let columns = (labels.len() as f64).sqrt().ceil().max(1.0) as u32;
+    let series = TimeSeriesView::new("every run")
+        .with_origin("/runs")
+        .with_contents(["+ /runs/*/stats/**".to_owned()]);
+    Blueprint::new(
+        Vertical::new([
+            Grid::new(views).with_grid_columns(columns).into(),
+            series.into(),
+        ])
+        .with_row_shares([3.0, 1.0]),
+    )
+    .with_auto_layout(false)
+    .with_auto_views(false)
+    .with_time_panel(TimePanel::new().with_state(PanelState::Collapsed))
+}
+
+/// Sends [`runs_blueprint`] as the recording's active and default layout.
+pub fn send_runs_blueprint(rec: &super::sink::Recording, labels: &[String]) -> anyhow::Result<()> {
+    runs_blueprint(labels)
+        .send(
+            rec.stream(),
+            rerun::blueprint::BlueprintActivation::default(),
+        )
+        .context("sending the blueprint")
+}

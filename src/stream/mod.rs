@@ -23,7 +23,9 @@ mod colors;
 pub mod paths;
 pub mod sink;
 
-pub use blueprint::{blueprint, send_blueprint, spatial_view_blueprint_path};
+pub use blueprint::{
+    blueprint, runs_blueprint, send_blueprint, send_runs_blueprint, spatial_view_blueprint_path,
+};
 pub use colors::level_color;
 use colors::*;
 pub use paths::{TIMELINE_FRAME, TIMELINE_SIM_TIME};

@@ -1,0 +1,34 @@
+//! `wisptree experiment` flags.
+
+use std::path::PathBuf;
+
+use crate::app::experiment::ExperimentCommand;
+
+/// `wisptree experiment` arguments.
+#[derive(Debug, Clone, clap::Args)]
+pub struct ExperimentArgs {
+    /// The experiment (see --list).
+    #[arg(value_name = "NAME", required_unless_present = "list")]
+    pub name: Option<String>,
+    /// List the experiments with what each shows.
+    #[arg(long)]
+    pub list: bool,
+    /// Record every run to this `.rrd` (one subtree `/runs/<label>` per run).
+    #[arg(long, value_name = "FILE")]
+    pub save: Option<PathBuf>,
+    /// Write the numbers as JSON to FILE: `{"experiment": NAME, "runs": [{"label": .., ..}]}`.
+    #[arg(long, value_name = "FILE")]
+    pub json: Option<PathBuf>,
+}
+
+impl ExperimentArgs {
+    /// The plain command.
+    pub fn command(&self) -> ExperimentCommand {
+        ExperimentCommand {
+            name: self.name.clone(),
+            list: self.list,
+            save: self.save.clone(),
+            json: self.json.clone(),
+        }
+    }
+}
