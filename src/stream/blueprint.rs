@@ -43,10 +43,16 @@ const NODE_CONTENTS: &[&str] = &[
     "+ /stats/splits",
     "+ /stats/merges",
 ];
+/// Collision work, and every solver's own counts (interpenetrating pairs, links, guides, …):
+/// everything under `/stats` that no other plot shows.
 const COLLISION_CONTENTS: &[&str] = &[
-    "+ /stats/pairs_tested",
-    "+ /stats/pairs_in_contact",
-    "+ /stats/body_contacts",
+    "+ /stats/**",
+    "- /stats/active_nodes/**",
+    "- /stats/splits",
+    "- /stats/merges",
+    "- /stats/kinetic_energy",
+    "- /stats/step_ms",
+    "- /stats/dropped_frames",
 ];
 const ENERGY_CONTENTS: &[&str] = &["+ /stats/kinetic_energy", "+ /params/**"];
 /// Milliseconds per step (1–10) would flatten the energy (J, ≪ 1) and the thresholds.
@@ -75,7 +81,7 @@ fn layout(style_name: &str) -> (ViewSpec, [ViewSpec; 4], ViewSpec) {
         },
         [
             plot("nodes, splits, merges", NODE_CONTENTS),
-            plot("collisions", COLLISION_CONTENTS),
+            plot("collisions and solver counts", COLLISION_CONTENTS),
             plot("energy, parameters", ENERGY_CONTENTS),
             plot("step time", TIMING_CONTENTS),
         ],

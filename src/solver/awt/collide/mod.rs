@@ -1,0 +1,229 @@
+//! Hair–hair and hair–body interaction (AWT §4, after Plante et al. §5).
+//!
+//! The simulation gathers the ACTIVE AWT nodes of a step into compact slot arrays (`pos`, `vel`)
+//! and the active segments (parent slot → child slot) into a [`SegmentsView`]. This module works
+//! only on those arrays:
+//!
+//! * [`HairCollider::accumulate`] adds the anisotropic hair–hair forces (friction, eq. 1, and
+//!   repulsion, eq. 2) split onto the segment nodes (eq. 3);
+//! * [`resolve_body`] moves child nodes out of the body spheres (§4.3).
+//!
+//! # Choices where the papers leave room
+//!
+//! * **Closest points in f64.** `parry3d` 0.25 is f32-only (`parry3d-f64` is a separate crate we do
+//!   not depend on), while positions are f64 and hair radii are sub-millimetre, so
+//!   [`closest_segment_params`] is Ericson's routine (the one parry uses in
+//!   `closest_points_segment_segment_with_locations_nD`) rewritten in f64 with relative epsilons.
+//!   A test compares it with parry on random segments. Parameters are reported as `s`, the weight of
+//!   the CHILD node (`P = (1 − s)·N_parent + s·N_child`), i.e. the paper's `u` is `1 − s`. For
+//!   (near-)parallel axes the closest points are not unique; we take the middle of the overlap of
+//!   the two segments (parry takes an end), so friction between parallel wisps — the common case —
+//!   is shared by both nodes instead of landing on one end.
+//! * **Which mass.** `k_f = α·m` and `R = k_r·m·(r − d)·n` with `m` the LIGHTER of the two child
+//!   masses: one coefficient serves both sides of the pair, and using the lighter one keeps
+//!   `α·dt < 1` sufficient for neither side to have its relative motion reversed.
+//! * **Relative-motion test (§4.1).** A pair is skipped when all four node-velocity differences
+//!   between the two segments (`v_i − v_j` for `i` a node of one segment and `j` of the other) are
+//!   below `epsilon`. The velocity of any point of a segment is a convex combination of its node
+//!   velocities, so then every point-to-point relative velocity, in particular `Ṗ2 − Ṗ1`, is below
+//!   `epsilon` too (a midpoint test would miss segments rotating about their middles).
+//! * **A wisp does not rub against itself.** Besides adjacent segments (sharing a node, which
+//!   always touch), two segments of the same GC are never tested: they are consecutive pieces of
+//!   one wisp, and a fat coarse wisp (radius ≈ segment length) would otherwise "touch" its own
+//!   segments two and three links away at rest and damp its own bending through friction. Split
+//!   sub-wisps are other GCs and do collide with each other. (5–10 % of the contacts of the
+//!   paper styles under `lean`.)
+//! * **Degenerate normals.** When the axes intersect (`d ≈ 0`) the repulsion normal is the cross
+//!   product of the axes, oriented from the second segment's midpoint towards the first's.
+//!   A zero-length segment has no orientation and gets friction only.
+//! * **Broad phase: a uniform voxel grid** (AWT §4.1), rebuilt every step: a dense cell array
+//!   over the bounding box of the segments' radius-inflated boxes, filled by a counting sort into
+//!   reused buffers. A pair is tested only in the cell at the min corner of the overlap of its two
+//!   cell ranges, so each pair sharing a voxel is tested once without a pair set or hashing (the
+//!   rule is one AND of two 3-bit masks stored in the cell lists, see [`HairCollider`]). Cell lists
+//!   are filled in segment order, so the forces depend only on the input.
+//! * **Cell size: three mean segment lengths.** The coarse wisps are fat (radius up to ~7 cm,
+//!   larger than a segment) and most pairs that share a voxel really are close, so the
+//!   closest-point tests dominate and the grid only has to keep its own costs below them. Smaller
+//!   cells put a fat wisp in dozens of cells and the pair visits repeated in every shared cell
+//!   grow faster than the pairs pruned (one mean length: 350 k cell-pair visits per step on
+//!   `long` for 25 k candidates); larger cells let more distant pairs through, which costs little
+//!   now that a candidate is rejected on a 36-byte [`SegBox`], but beyond ~6 lengths there are so
+//!   few cells that the search can no longer be cut into balanced chunks for two threads.
+//!   Measured with `examples/interactions.rs` on the four paper styles under `lean`: 2–4 lengths within
+//!   the noise of one another. The dense array is capped at [`CELLS_PER_SEGMENT`] cells per
+//!   segment (clearing and scanning it cost per cell) and at [`MAX_CELLS`] in all (the cell side
+//!   grows instead), which bounds time and memory when a node flies away.
+//! * **Filters are conservative and shared.** Box overlap (each box inflated by its own radius
+//!   and rounded outwards to f32, so two boxes overlap whenever the segments are within
+//!   `r1 + r2` on every axis), adjacency and the
+//!   relative-motion test are symmetric and computed from per-segment data gathered once per step;
+//!   the closest points and the response are computed with the lower segment index first (cell
+//!   lists are ascending), as in [`accumulate_brute_force`], so both find the same contacts with
+//!   bit-identical pair forces (only the order in which they are summed differs).
+//! * **Two threads, same forces.** The pair search (the cell loop and the closest points, ~¾ of
+//!   the stage) can be shared with one helper thread, chunk by chunk, see [`HairCollider`]; the
+//!   contacts are applied in the one-thread order, so the result is bit-identical. (A fixed
+//!   half-and-half split was tried first: on a loaded 2-core machine the caller then often
+//!   waited for a descheduled helper, and `wisptree run` took 4.5–8 s instead of ~4.) rayon was tried first
+//!   (15–30 % faster on 2 busy cores) but every call from outside its pool pushes a job on its
+//!   injector, which allocates a 1.5 kB block every 63 jobs and breaks the no-allocation
+//!   guarantee (tests/alloc.rs); a parked helper thread with its own buffers does not.
+
+use std::sync::{Mutex, RwLock};
+
+mod body;
+mod collider;
+mod grid;
+mod narrow;
+mod reference;
+mod response;
+mod worker;
+
+pub use body::*;
+pub use collider::*;
+pub use grid::*;
+pub use narrow::*;
+pub use reference::*;
+pub use response::*;
+use worker::*;
+
+/// The active segments of one step, as parallel slices (structure of arrays).
+pub struct SegmentsView<'a> {
+    /// Slot of the parent node.
+    pub parent: &'a [u32],
+    /// Slot of the child node.
+    pub child: &'a [u32],
+    /// Cylinder radius = the child node's radius (AWT §4.1), m.
+    pub radius: &'a [f64],
+    /// Mass of the child node, kg.
+    pub child_mass: &'a [f64],
+    /// The generalized cylinder (level and GC) of the child node: two segments of one chain
+    /// never collide (see the module docs).
+    pub chain: &'a [u32],
+}
+
+impl SegmentsView<'_> {
+    /// Number of segments. Panics if the slices differ in length (a bug in the caller).
+    pub fn len(&self) -> usize {
+        let n = self.parent.len();
+        assert!(
+            self.child.len() == n
+                && self.radius.len() == n
+                && self.child_mass.len() == n
+                && self.chain.len() == n,
+            "SegmentsView slices differ in length: parent {}, child {}, radius {}, child_mass {}, \
+             chain {}",
+            n,
+            self.child.len(),
+            self.radius.len(),
+            self.child_mass.len(),
+            self.chain.len()
+        );
+        n
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+}
+
+/// Parameters of the hair–hair response (AWT §4.2).
+#[derive(Debug, Clone, Copy)]
+pub struct ContactParams {
+    /// α, s⁻¹ ; k_f = α·m.
+    pub friction: f64,
+    /// k_r per kilogram, s⁻² (R = k_r · m · (r − d) · n).
+    pub repulsion: f64,
+    /// Repulsion only when |cos(angle between axes)| < this.
+    pub cos_angle_threshold: f64,
+    /// Relative speed below which a pair is skipped, m/s.
+    pub epsilon: f64,
+    /// The integration step the forces will be applied over, s (see [`apply_contacts`]).
+    pub dt: f64,
+}
+
+/// One pair of segments in contact: where, and the unscaled eq. 1 and eq. 2 forces on `a`.
+///
+/// The forces are stored in f32: they only scale the f64 force accumulators, the same rounded
+/// value goes to both sides (so pair forces still cancel exactly), and the list is the largest
+/// buffer of the step (tens of thousands of entries), so halving it keeps it in cache.
+#[derive(Debug, Clone, Copy)]
+pub struct Contact {
+    pub a: u32,
+    pub b: u32,
+    /// Closest points as fractions from parent (0) to child (1) on `a` and `b`.
+    pub s: f64,
+    pub t: f64,
+    /// Friction (eq. 1) and repulsion (eq. 2) on `a`; `b` gets the opposite.
+    pub friction: [f32; 3],
+    pub repulsion: [f32; 3],
+}
+
+impl ContactParams {
+    /// Checks the parameters for a time step `dt` (s); the message names the offending field.
+    /// `α·dt < 1` is the AWT's condition for friction never to reverse a relative motion.
+    pub fn validate(&self, dt: f64) -> Result<(), String> {
+        let finite_nonneg = |name: &str, v: f64| {
+            if v.is_finite() && v >= 0.0 {
+                Ok(())
+            } else {
+                Err(format!("contact.{name} must be finite and >= 0, got {v}"))
+            }
+        };
+        finite_nonneg("friction", self.friction)?;
+        finite_nonneg("repulsion", self.repulsion)?;
+        finite_nonneg("epsilon", self.epsilon)?;
+        if !(self.cos_angle_threshold.is_finite() && self.cos_angle_threshold >= 0.0) {
+            return Err(format!(
+                "contact.cos_angle_threshold must be finite and >= 0, got {}",
+                self.cos_angle_threshold
+            ));
+        }
+        if self.friction * dt >= 1.0 {
+            return Err(format!(
+                "contact.friction: α·dt must be < 1 so friction cannot reverse a relative motion \
+                 (AWT §4.2), got α = {} s⁻¹ with dt = {} s (α·dt = {})",
+                self.friction,
+                dt,
+                self.friction * dt
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// Counters of one [`HairCollider::accumulate`] call.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct PairStats {
+    /// Pairs the broad phase visits, each once: the pairs sharing at least one voxel (all
+    /// `n·(n − 1)/2` pairs in [`accumulate_brute_force`]).
+    pub candidates: u32,
+    /// Pairs that reached the closest-point routine: not adjacent, moving relative to each other,
+    /// boxes inflated by `r1 + r2` overlapping on every axis. Each such pair counts once.
+    pub tested: u32,
+    /// Of those, the pairs whose cylinders intersect (`d < r1 + r2`).
+    pub in_contact: u32,
+}
+
+impl PairStats {
+    pub(super) fn add(&mut self, o: &PairStats) {
+        self.candidates += o.candidates;
+        self.tested += o.tested;
+        self.in_contact += o.in_contact;
+    }
+}
+
+// The locks only guard plain buffers: a panic elsewhere leaves them consistent enough to reuse
+// (they are cleared before every use), so poisoning is ignored.
+pub(super) fn lock<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
+    m.lock().unwrap_or_else(|e| e.into_inner())
+}
+
+pub(super) fn read<T>(l: &RwLock<T>) -> std::sync::RwLockReadGuard<'_, T> {
+    l.read().unwrap_or_else(|e| e.into_inner())
+}
+
+pub(super) fn write<T>(l: &RwLock<T>) -> std::sync::RwLockWriteGuard<'_, T> {
+    l.write().unwrap_or_else(|e| e.into_inner())
+}

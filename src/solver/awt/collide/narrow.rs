@@ -1,0 +1,328 @@
+//! The narrow phase: per-segment data, the cheap filters and the exact closest-point test of two segments (AWT §4.2).
+
+use nalgebra::Vector3;
+
+use super::*;
+
+#[inline]
+pub(super) fn widen(v: [f32; 3]) -> Vector3<f64> {
+    Vector3::new(v[0] as f64, v[1] as f64, v[2] as f64)
+}
+
+#[inline]
+pub(super) fn narrow(v: &Vector3<f64>) -> [f32; 3] {
+    [v.x as f32, v.y as f32, v.z as f32]
+}
+
+/// One segment's broad-phase data: the box of its nodes inflated by its radius, in f32 rounded
+/// outwards (so it always contains the f64 box), and its node slots for the adjacency test.
+/// Two inflated boxes overlap exactly when the plain boxes are within `r1 + r2` on every axis.
+#[derive(Clone, Copy, Default)]
+pub(super) struct SegBox {
+    pub(super) lo: [f32; 3],
+    pub(super) hi: [f32; 3],
+    pub(super) parent: u32,
+    pub(super) child: u32,
+    pub(super) chain: u32,
+}
+
+impl SegBox {
+    #[inline]
+    pub(super) fn new(segs: &SegmentsView, pos: &[Vector3<f64>], i: usize) -> Self {
+        let (parent, child) = (segs.parent[i], segs.child[i]);
+        let (xp, xc) = (pos[parent as usize], pos[child as usize]);
+        let r = segs.radius[i];
+        let (lo, hi) = (xp.inf(&xc).add_scalar(-r), xp.sup(&xc).add_scalar(r));
+        SegBox {
+            lo: [0, 1, 2].map(|k| (lo[k] as f32).next_down()),
+            hi: [0, 1, 2].map(|k| (hi[k] as f32).next_up()),
+            parent,
+            child,
+            chain: segs.chain[i],
+        }
+    }
+
+    pub(super) fn bounds(&self) -> (Vector3<f64>, Vector3<f64>) {
+        (
+            Vector3::from(self.lo.map(f64::from)),
+            Vector3::from(self.hi.map(f64::from)),
+        )
+    }
+}
+
+/// Whether a pair may touch: inflated boxes overlapping on every axis, not adjacent, not on one
+/// chain.
+#[inline(always)]
+pub(super) fn near(a: &SegBox, b: &SegBox) -> bool {
+    // Non-short-circuit `|`: the six comparisons are independent, one branch instead of six.
+    let apart = (a.lo[0] > b.hi[0])
+        | (b.lo[0] > a.hi[0])
+        | (a.lo[1] > b.hi[1])
+        | (b.lo[1] > a.hi[1])
+        | (a.lo[2] > b.hi[2])
+        | (b.lo[2] > a.hi[2]);
+    // Adjacent segments (a chain, or siblings on one parent) always touch, and the segments
+    // of one GC are pieces of one wisp: never test them.
+    let adjacent = (a.parent == b.parent)
+        | (a.parent == b.child)
+        | (a.child == b.parent)
+        | (a.child == b.child)
+        | (a.chain == b.chain);
+    !(apart | adjacent)
+}
+
+/// One segment's data for the relative-motion test and the closest points, gathered once per
+/// step.
+#[derive(Clone, Copy)]
+pub(super) struct SegPre {
+    pub(super) radius: f64,
+    /// Index in the [`SegmentsView`].
+    pub(super) seg: u32,
+    pub(super) xp: Vector3<f64>,
+    pub(super) xc: Vector3<f64>,
+    /// `xc − xp` and its squared length.
+    pub(super) d: Vector3<f64>,
+    pub(super) len2: f64,
+    pub(super) vp: Vector3<f64>,
+    pub(super) vc: Vector3<f64>,
+    pub(super) mass: f64,
+}
+
+impl SegPre {
+    #[inline]
+    pub(super) fn new(
+        segs: &SegmentsView,
+        pos: &[Vector3<f64>],
+        vel: &[Vector3<f64>],
+        i: usize,
+    ) -> Self {
+        let (parent, child) = (segs.parent[i] as usize, segs.child[i] as usize);
+        let (xp, xc) = (pos[parent], pos[child]);
+        let d = xc - xp;
+        SegPre {
+            radius: segs.radius[i],
+            seg: i as u32,
+            xp,
+            xc,
+            d,
+            len2: d.norm_squared(),
+            vp: vel[parent],
+            vc: vel[child],
+            mass: segs.child_mass[i],
+        }
+    }
+}
+
+/// Whether the two segments move relative to each other: a bound on every point-to-point
+/// relative speed (see the module docs) at or above `epsilon`.
+#[inline(always)]
+pub(super) fn moving(a: &SegPre, b: &SegPre, eps2: f64) -> bool {
+    // max(…) ≥ ε² as four independent comparisons (`f64::max` branches on NaN).
+    ((a.vp - b.vp).norm_squared() >= eps2)
+        | ((a.vp - b.vc).norm_squared() >= eps2)
+        | ((a.vc - b.vp).norm_squared() >= eps2)
+        | ((a.vc - b.vc).norm_squared() >= eps2)
+}
+
+/// The contact of a pair that passed [`near`] and [`moving`], if the cylinders intersect. `a`
+/// must be the segment with the lower index, so that the grid and the reference compute
+/// bit-identical pair forces.
+#[inline]
+pub(super) fn contact(a: &SegPre, b: &SegPre, p: &ContactParams) -> Option<Contact> {
+    let (xpa, xca, xpb, xcb) = (a.xp, a.xc, b.xp, b.xc);
+    let (vpa, vca, vpb, vcb) = (a.vp, a.vc, b.vp, b.vc);
+    let r = a.radius + b.radius;
+    let (s, t) = closest_params(&xpa, &a.d, a.len2, &xpb, &b.d, b.len2);
+    let (d1, d2) = (a.d, b.d);
+    let p1 = xpa + d1 * s;
+    let p2 = xpb + d2 * t;
+    let delta = p1 - p2;
+    let dist2 = delta.norm_squared();
+    if dist2 >= r * r {
+        return None;
+    }
+    let m = a.mass.min(b.mass);
+
+    // Eq. 1: viscous friction at the closest points.
+    let v1 = vpa * (1.0 - s) + vca * s;
+    let v2 = vpb * (1.0 - t) + vcb * t;
+    let friction = (v2 - v1) * (p.friction * m);
+    let mut repulsion = Vector3::zeros();
+
+    // Eq. 2: repulsion only between wisps crossing at a large enough angle.
+    // |cos| < threshold, compared squared (no root or division on the common parallel pair);
+    // a zero-length segment counts as parallel (|cos| = 1).
+    let len2 = a.len2 * b.len2;
+    let dot = d1.dot(&d2);
+    let thr = p.cos_angle_threshold;
+    let crossing = if len2 > 0.0 {
+        dot * dot < thr * thr * len2
+    } else {
+        1.0 < thr
+    };
+    if crossing {
+        let d = dist2.sqrt();
+        let n = if d > 1e-9 * r {
+            delta / d
+        } else {
+            let mid = (xpa + xca - xpb - xcb) * 0.5;
+            degenerate_normal(&d1, &d2, &mid)
+        };
+        // Only while the two approach: a penalty that also pushed separating wisps would, with
+        // the skipping of still pairs (§4.1), chatter forever on resting hair and pump energy
+        // into it. The response stays soft (§4.2) and never accelerates a separation.
+        // It is also capped at the impulse that stops the approach within the step, so like
+        // friction it can bring the normal relative velocity to zero but never reverse it.
+        let approach = -(v1 - v2).dot(&n);
+        if approach > 0.0 {
+            let push = (p.repulsion * m * (r - d)).min(m * approach / p.dt.max(1e-12));
+            repulsion = n * push;
+        }
+    }
+
+    Some(Contact {
+        a: a.seg,
+        b: b.seg,
+        s,
+        t,
+        friction: narrow(&friction),
+        repulsion: narrow(&repulsion),
+    })
+}
+
+/// Unit normal for intersecting axes: perpendicular to both, pointing to the side of `mid`
+/// (first midpoint minus second).
+pub(super) fn degenerate_normal(
+    d1: &Vector3<f64>,
+    d2: &Vector3<f64>,
+    mid: &Vector3<f64>,
+) -> Vector3<f64> {
+    let c = d1.cross(d2);
+    let cn = c.norm();
+    let scale = d1.norm() * d2.norm();
+    let n = if cn > 1e-9 * scale {
+        c / cn
+    } else {
+        // Parallel axes (only reachable with a threshold above 1): the midpoint offset across d1.
+        let u = d1.try_normalize(0.0).unwrap_or_else(Vector3::x);
+        let across = mid - u * u.dot(mid);
+        across
+            .try_normalize(1e-300)
+            .unwrap_or_else(|| any_perpendicular(&u))
+    };
+    if n.dot(mid) < 0.0 {
+        -n
+    } else {
+        n
+    }
+}
+
+/// A unit vector perpendicular to the unit vector `u`, chosen deterministically.
+pub(super) fn any_perpendicular(u: &Vector3<f64>) -> Vector3<f64> {
+    let axis = if u.x.abs() < 0.57 {
+        Vector3::x()
+    } else {
+        Vector3::y()
+    };
+    u.cross(&axis).normalize()
+}
+
+/// Closest points between segments `[a1, b1]` and `[a2, b2]` (Ericson, *Real-Time Collision
+/// Detection* §5.1.9, as in parry), in f64. Returns `(s, t)` with the closest points
+/// `a1 + s·(b1 − a1)` and `a2 + t·(b2 − a2)`, both in `[0, 1]`. For parallel overlapping segments
+/// `s` is the middle of the overlap.
+pub fn closest_segment_params(
+    a1: &Vector3<f64>,
+    b1: &Vector3<f64>,
+    a2: &Vector3<f64>,
+    b2: &Vector3<f64>,
+) -> (f64, f64) {
+    let d1 = b1 - a1;
+    let d2 = b2 - a2;
+    closest_params(a1, &d1, d1.norm_squared(), a2, &d2, d2.norm_squared())
+}
+
+/// [`closest_segment_params`] from the first points, the directions `d = b − a` and their squared
+/// lengths (computed once per segment by the caller).
+#[inline]
+pub(super) fn closest_params(
+    a1: &Vector3<f64>,
+    d1: &Vector3<f64>,
+    a: f64,
+    a2: &Vector3<f64>,
+    d2: &Vector3<f64>,
+    e: f64,
+) -> (f64, f64) {
+    let r = a1 - a2;
+    let f = d2.dot(&r);
+    // Relative to the scene: a segment shorter than 1e-12 of the other or of the gap is a point.
+    let scale = a.max(e).max(r.norm_squared());
+    let tiny = 1e-24 * scale;
+    if a <= tiny && e <= tiny {
+        return (0.0, 0.0);
+    }
+    if a <= tiny {
+        return (0.0, (f / e).clamp(0.0, 1.0));
+    }
+    let c = d1.dot(&r);
+    if e <= tiny {
+        return ((-c / a).clamp(0.0, 1.0), 0.0);
+    }
+    let b = d1.dot(d2);
+    let denom = a * e - b * b; // = |d1 × d2|² ≥ 0
+    let mut s = if denom > 1e-12 * a * e {
+        ((b * f - c * e) / denom).clamp(0.0, 1.0)
+    } else {
+        // Parallel: seg 2's ends project on seg 1 at -c/a and (b - c)/a.
+        let (p, q) = (-c / a, (b - c) / a);
+        let (lo, hi) = (p.min(q).max(0.0), p.max(q).min(1.0));
+        if lo <= hi {
+            0.5 * (lo + hi)
+        } else {
+            (0.5 * (p + q)).clamp(0.0, 1.0)
+        }
+    };
+    let mut t = (b * s + f) / e;
+    if t < 0.0 {
+        t = 0.0;
+        s = (-c / a).clamp(0.0, 1.0);
+    } else if t > 1.0 {
+        t = 1.0;
+        s = ((b - c) / a).clamp(0.0, 1.0);
+    }
+    (s, t)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    pub(super) fn closest_params_cross() {
+        let (s, t) = closest_segment_params(
+            &Vector3::new(-1.0, 0.0, 0.0),
+            &Vector3::new(3.0, 0.0, 0.0),
+            &Vector3::new(0.0, -1.0, 1.0),
+            &Vector3::new(0.0, 1.0, 1.0),
+        );
+        assert!(
+            (s - 0.25).abs() < 1e-15 && (t - 0.5).abs() < 1e-15,
+            "{s} {t}"
+        );
+    }
+
+    #[test]
+    pub(super) fn closest_params_parallel_overlap_takes_middle() {
+        // Seg 2 covers x ∈ [1, 3] above seg 1 (x ∈ [0, 2]): overlap [1, 2], middle x = 1.5.
+        let (s, t) = closest_segment_params(
+            &Vector3::new(0.0, 0.0, 0.0),
+            &Vector3::new(2.0, 0.0, 0.0),
+            &Vector3::new(1.0, 0.1, 0.0),
+            &Vector3::new(3.0, 0.1, 0.0),
+        );
+        assert!(
+            (s - 0.75).abs() < 1e-15 && (t - 0.25).abs() < 1e-15,
+            "{s} {t}"
+        );
+    }
+}

@@ -1,0 +1,112 @@
+//! The response (AWT §4.2): friction and repulsion forces from the contacts, split between parent and child nodes.
+
+use nalgebra::Vector3;
+
+use super::*;
+
+/// Adds the contacts' forces to the nodes (eq. 3), limited so that a node touching many
+/// segments at once stays stable. (For callers holding a list of contacts; the collider itself
+/// accumulates the loads while it finds the contacts.)
+///
+/// The AWT's `α·dt < 1` keeps ONE contact from reversing a relative velocity, but a node in a
+/// dense wisp touches dozens of segments in the same step and the explicit sum of their
+/// friction impulses overshoots (the hair explodes). Each node's load `W = Σ share·m/m_node`
+/// over its contacts is therefore computed first, and a pair's friction is scaled by
+/// `1 / max(1, 2·α·dt·W)` and its repulsion by `1 / max(1, 2·k_r·dt²·W)`, W the largest load
+/// among the pair's four nodes. The scale is the same on both sides, so forces still sum to
+/// zero; a lone contact (W ≤ 1) is untouched when `α·dt < 1/2`. Here `m` is the pair's mass
+/// (the lighter child). `inv_mass` and `load` are scratch buffers (one entry per node slot).
+pub fn apply_contacts(
+    contacts: &[Contact],
+    segs: &SegmentsView,
+    p: &ContactParams,
+    inv_mass: &mut Vec<f64>,
+    load: &mut Vec<f64>,
+    force: &mut [Vector3<f64>],
+) {
+    let mut response = Response::new(segs, force.len(), inv_mass, load);
+    for c in contacts {
+        response.record(c, segs);
+    }
+    response.apply(&[contacts], segs, p, force);
+}
+
+/// The per-node loads of [`apply_contacts`], accumulated contact by contact.
+pub(super) struct Response<'a> {
+    /// Per slot: 1 / its mass as a child (0 for a kinematic root); then, in [`Self::apply`],
+    /// the friction scale of the node.
+    pub(super) inv_mass: &'a mut Vec<f64>,
+    /// Per slot: the load `W`; then, in [`Self::apply`], the repulsion scale of the node.
+    pub(super) load: &'a mut Vec<f64>,
+}
+
+impl<'a> Response<'a> {
+    pub(super) fn new(
+        segs: &SegmentsView,
+        nodes: usize,
+        inv_mass: &'a mut Vec<f64>,
+        load: &'a mut Vec<f64>,
+    ) -> Self {
+        // A slot's mass is its mass as a child; a slot that is never a child is a kinematic
+        // root, which no force moves (infinite mass, no load).
+        inv_mass.clear();
+        inv_mass.resize(nodes, 0.0);
+        for i in 0..segs.len() {
+            inv_mass[segs.child[i] as usize] = 1.0 / segs.child_mass[i];
+        }
+        load.clear();
+        load.resize(nodes, 0.0);
+        Response { inv_mass, load }
+    }
+
+    /// Adds a contact's shares to the loads of its four nodes.
+    #[inline]
+    pub(super) fn record(&mut self, c: &Contact, segs: &SegmentsView) {
+        let (a, b) = (c.a as usize, c.b as usize);
+        let m = segs.child_mass[a].min(segs.child_mass[b]);
+        for (n, share) in [
+            (segs.parent[a], 1.0 - c.s),
+            (segs.child[a], c.s),
+            (segs.parent[b], 1.0 - c.t),
+            (segs.child[b], c.t),
+        ] {
+            self.load[n as usize] += share * m * self.inv_mass[n as usize];
+        }
+    }
+
+    /// Scales each contact by the loads of its nodes and adds its forces (eq. 3).
+    ///
+    /// `1 / max(1, k·W)` with `W` the largest of the four loads is the smallest of the four
+    /// nodes' `1 / max(1, k·W_n)` (the map is decreasing), so the scales are computed once per
+    /// node instead of twice per contact.
+    pub(super) fn apply(
+        self,
+        lists: &[&[Contact]],
+        segs: &SegmentsView,
+        p: &ContactParams,
+        force: &mut [Vector3<f64>],
+    ) {
+        let (kf, kr) = (2.0 * p.friction * p.dt, 2.0 * p.repulsion * p.dt * p.dt);
+        let (fric, rep) = (&mut self.inv_mass[..], &mut self.load[..]);
+        for (f, w) in fric.iter_mut().zip(rep.iter_mut()) {
+            *f = 1.0 / (kf * *w).max(1.0);
+            *w = 1.0 / (kr * *w).max(1.0);
+        }
+        for c in lists.iter().flat_map(|l| l.iter()) {
+            let (a, b) = (c.a as usize, c.b as usize);
+            let (pa, ca) = (segs.parent[a] as usize, segs.child[a] as usize);
+            let (pb, cb) = (segs.parent[b] as usize, segs.child[b] as usize);
+            let fs = fric[pa].min(fric[ca]).min(fric[pb]).min(fric[cb]);
+            let rs = rep[pa].min(rep[ca]).min(rep[pb]).min(rep[cb]);
+            let f = widen(c.friction) * fs + widen(c.repulsion) * rs;
+            // Eq. 3: F at P = (1 − s)·N_p + s·N_c goes (1 − s)·F to the parent, s·F to the
+            // child.
+            let fa_child = f * c.s;
+            force[pa] += f - fa_child;
+            force[ca] += fa_child;
+            let fb_child = f * c.t;
+            force[pb] -= f - fb_child;
+            force[cb] -= fb_child;
+        }
+    }
+}
