@@ -16,7 +16,7 @@ fn grow(s: &LoadedStyle) -> RawHair {
 fn generated(s: &Style) -> &style::Generated {
     match &s.hair {
         Hair::Generated(g) => g,
-        Hair::TressFx(_) => panic!("not a generated style"),
+        _ => panic!("not a generated style"),
     }
 }
 
