@@ -138,6 +138,7 @@ pub fn penetration_reaction(w: &mut Wisps, balls: &[Ball], pose: &Pose, margin: 
     let mut moved = 0;
     for wi in 0..w.len() {
         let r = w.points(wi);
+        let moved_before = moved;
         for p in r.start + 1..r.end {
             let before = w.pos[p];
             let mut x = before;
@@ -169,6 +170,12 @@ pub fn penetration_reaction(w: &mut Wisps, balls: &[Ball], pose: &Pose, margin: 
                 }
                 moved += 1;
             }
+        }
+        // Envelope points after the whole skeleton, in frames of the moved skeleton.
+        if moved > moved_before {
+            w.compute_wisp_frames(wi, pose);
+        }
+        for p in r.start + 1..r.end {
             for j in 0..ENV {
                 let dir = w.env_dir(p, j);
                 let e = p * ENV + j;

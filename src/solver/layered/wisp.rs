@@ -226,33 +226,37 @@ impl Wisps {
     /// frames never twist whatever the way the wisp bends.
     pub fn compute_frames(&mut self, pose: &Pose) {
         for wi in 0..self.len() {
-            let r = self.points(wi);
-            let mut d_prev = (self.pos[r.start] - self.anchor[wi])
-                .try_normalize(1e-12)
-                .unwrap_or(-Vector3::y());
-            let t_ref = pose.transform_vector(&self.t0_rest[wi]);
-            let mut u_prev = pose.transform_vector(&self.u0_rest[wi]);
-            let mut t_prev = t_ref;
-            for p in r.clone() {
-                let t = if p + 1 < r.end {
-                    let d = (self.pos[p + 1] - self.pos[p])
-                        .try_normalize(1e-12)
-                        .unwrap_or(d_prev);
-                    let t = bisector(&d_prev, &d);
-                    d_prev = d;
-                    t
-                } else {
-                    d_prev
-                };
-                let u = transport(&u_prev, &t_prev, &t);
-                let u = (u - t * u.dot(&t))
+            self.compute_wisp_frames(wi, pose);
+        }
+    }
+
+    /// [`Wisps::compute_frames`] for wisp `wi` only.
+    pub fn compute_wisp_frames(&mut self, wi: usize, pose: &Pose) {
+        let r = self.points(wi);
+        let mut d_prev = (self.pos[r.start] - self.anchor[wi])
+            .try_normalize(1e-12)
+            .unwrap_or(-Vector3::y());
+        let mut u_prev = pose.transform_vector(&self.u0_rest[wi]);
+        let mut t_prev = pose.transform_vector(&self.t0_rest[wi]);
+        for p in r.clone() {
+            let t = if p + 1 < r.end {
+                let d = (self.pos[p + 1] - self.pos[p])
                     .try_normalize(1e-12)
-                    .unwrap_or_else(|| any_perpendicular(&t));
-                self.t[p] = t;
-                self.u[p] = u;
-                t_prev = t;
-                u_prev = u;
-            }
+                    .unwrap_or(d_prev);
+                let t = bisector(&d_prev, &d);
+                d_prev = d;
+                t
+            } else {
+                d_prev
+            };
+            let u = transport(&u_prev, &t_prev, &t);
+            let u = (u - t * u.dot(&t))
+                .try_normalize(1e-12)
+                .unwrap_or_else(|| any_perpendicular(&t));
+            self.t[p] = t;
+            self.u[p] = u;
+            t_prev = t;
+            u_prev = u;
         }
     }
 }
