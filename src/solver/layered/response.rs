@@ -13,7 +13,7 @@
 use nalgebra::Vector3;
 
 use super::detect::{Contact, PairContacts};
-use super::wisp::{Wisps, ENV};
+use super::wisp::{Wisps, ENV, MIN_RHO_FRACTION};
 use crate::sim::dynamics::damp_relative;
 
 /// Below this |σ_p × σ_s| (sine of the angle between the axes, ≈ 2°) the two axes are taken
@@ -182,8 +182,40 @@ pub fn respond(
         for c in &contacts[pair.first as usize..pair.end as usize] {
             respond_contact(w, c, inter, pp);
         }
+        if !inter {
+            collide_segments(w, a, b);
+        }
     }
     counts
+}
+
+/// Mass of a segment's two skeleton points (a kinematic root counts as immovable) and their
+/// mass-weighted velocity.
+fn segment_momentum(w: &Wisps, p: usize) -> (f64, Vector3<f64>) {
+    let (ia, ib) = (inv_mass(w, p), inv_mass(w, p + 1));
+    if ia == 0.0 || ib == 0.0 {
+        let v = if ia == 0.0 { w.vel[p] } else { w.vel[p + 1] };
+        return (super::forces::KINEMATIC_MASS, v);
+    }
+    let (ma, mb) = (w.mass[p], w.mass[p + 1]);
+    (ma + mb, (w.vel[p] * ma + w.vel[p + 1] * mb) / (ma + mb))
+}
+
+/// §4.2.2 "we simply eliminate the relative velocities of the point-masses located in the
+/// contact area": besides the contact points, the two colliding segments' skeletons take the
+/// mass-weighted average of their velocities (each segment keeps its internal motion).
+fn collide_segments(w: &mut Wisps, a: usize, b: usize) {
+    let (ma, va) = segment_momentum(w, a);
+    let (mb, vb) = segment_momentum(w, b);
+    let j = collision_impulse(&va, ma, &vb, mb);
+    for (p, m, sign) in [(a, ma, 1.0), (b, mb, -1.0)] {
+        let dv = j * (sign / m);
+        for q in [p, p + 1] {
+            if inv_mass(w, q) > 0.0 {
+                w.vel[q] += dv;
+            }
+        }
+    }
 }
 
 fn respond_contact(w: &mut Wisps, c: &Contact, inter: bool, pp: &PairParams) {
@@ -191,7 +223,13 @@ fn respond_contact(w: &mut Wisps, c: &Contact, inter: bool, pp: &PairParams) {
     let own = q - 1;
     let seg = c.seg as usize;
     let s = c.s;
-    let env = (c.which as usize) < ENV;
+    // An envelope point crushed to its smallest radius is rigid along its half-line: it
+    // moves with its skeleton point, with the skeleton point's mass ("if the object moves
+    // further, the entire wisp itself should move", §3.3).
+    let env = (c.which as usize) < ENV && {
+        let e = q * ENV + c.which as usize;
+        w.rho[e] > MIN_RHO_FRACTION * w.rho_rest[e] * (1.0 + 1e-6)
+    };
     let (xp, vp, mp, dir) = if env {
         let j = c.which as usize;
         (
@@ -199,6 +237,14 @@ fn respond_contact(w: &mut Wisps, c: &Contact, inter: bool, pp: &PairParams) {
             w.env_vel(q, j),
             pp.envelope_mass * w.mass[q],
             w.env_dir(q, j),
+        )
+    } else if (c.which as usize) < ENV {
+        let j = c.which as usize;
+        (
+            w.env_pos(q, j),
+            w.env_vel(q, j),
+            w.mass[q],
+            Vector3::zeros(),
         )
     } else {
         (w.pos[q], w.vel[q], w.mass[q], Vector3::zeros())

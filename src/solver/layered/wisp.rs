@@ -14,7 +14,7 @@ use crate::motion::Pose;
 pub const ENV: usize = 4;
 
 /// Smallest envelope radius over its rest radius: a section may be crushed, not inverted.
-pub const MIN_RHO_FRACTION: f64 = 0.05;
+pub const MIN_RHO_FRACTION: f64 = 0.25;
 
 /// Every wisp of a model, skeleton and envelope.
 #[derive(Debug, Clone, Default)]
