@@ -636,3 +636,29 @@ fn plante_fig9_high_viscosity_keeps_the_wisps_together_longer() {
         ),
     }
 }
+
+#[test]
+fn awt_fig5_the_split_travels_from_tip_to_root() {
+    let runs = experiment("awt-fig5", 0.5);
+    assert_eq!(runs.len(), 1);
+    let list: Vec<u64> = metric(&runs, "swing", "split_cross_sections")
+        .as_array()
+        .expect("a list")
+        .iter()
+        .map(|v| v.as_u64().expect("an index"))
+        .collect();
+    assert!(
+        list.len() >= 2,
+        "the swung wisp splits over several sections: {list:?}"
+    );
+    assert!(
+        list.windows(2).all(|w| w[1] <= w[0]),
+        "tip to root: {list:?}"
+    );
+}
+
+#[test]
+fn every_experiment_is_registered_once() {
+    let names: Vec<&str> = wisptree::experiment::all().iter().map(|e| e.name).collect();
+    assert_eq!(names, ["plante-fig8", "plante-fig9", "awt-fig5"]);
+}
