@@ -9,7 +9,7 @@ use serde_json::{json, Map};
 use super::{ExperimentDef, ExperimentOptions, ExperimentRun, FrameSink};
 use crate::model::HairModel;
 use crate::scene::Scene;
-use crate::solver::{EventKind, Solver, SolverKind};
+use crate::solver::{EventKind, SolverKind};
 use crate::style::builtin::StyleSource;
 
 const SCENE: &str = include_str!("../../scenes/awt_fig5.ron");
@@ -23,10 +23,13 @@ pub static AWT_FIG5: ExperimentDef = ExperimentDef {
     description: "Bertails et al. 2003 (AWT), Fig. 5: a two-level wisp swung until it splits; \
                   the split travels from tip to root",
     expectation: "split_cross_sections never increases (tip to root)",
-    run: run,
+    run: run_fig5,
 };
 
-fn run(opts: &ExperimentOptions, sink: &mut dyn FrameSink) -> anyhow::Result<Vec<ExperimentRun>> {
+fn run_fig5(
+    opts: &ExperimentOptions,
+    sink: &mut dyn FrameSink,
+) -> anyhow::Result<Vec<ExperimentRun>> {
     let path = Path::new("scenes/awt_fig5.ron");
     let loaded = crate::style::parse(path, SCENE)?;
     let model = HairModel::from_style(&loaded)?;

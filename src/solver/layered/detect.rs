@@ -136,11 +136,9 @@ impl Detector {
         let dm = dims(cell);
         let ncells = dm.iter().product::<usize>();
         let cell_of = |x: &Vector3<f64>| -> [u32; 3] {
-            let mut c = [0u32; 3];
-            for k in 0..3 {
-                c[k] = (((x[k] - glo[k]) / cell).floor().max(0.0) as usize).min(dm[k] - 1) as u32;
-            }
-            c
+            std::array::from_fn(|k| {
+                (((x[k] - glo[k]) / cell).floor().max(0.0) as usize).min(dm[k] - 1) as u32
+            })
         };
         let index = |c: [u32; 3]| (c[0] as usize * dm[1] + c[1] as usize) * dm[2] + c[2] as usize;
         // Counting sort of the segments into the cells their boxes cover.

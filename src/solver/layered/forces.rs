@@ -52,8 +52,8 @@ fn is_tip(w: &Wisps, p: usize) -> bool {
 /// §5.1 item 1: every force, from the current positions and frames.
 pub fn accumulate_forces(w: &mut Wisps, c: &Coeffs) {
     let n = w.point_count();
-    for p in 0..n {
-        w.force[p] = c.gravity * w.mass[p];
+    for (f, m) in w.force.iter_mut().zip(&w.mass) {
+        *f = c.gravity * *m;
     }
     for p in 0..n {
         if is_tip(w, p) {
@@ -89,13 +89,13 @@ pub fn accumulate_forces(w: &mut Wisps, c: &Coeffs) {
         for (j, d) in dirs.iter_mut().enumerate() {
             *d = w.env_dir(p, j);
         }
-        for j in 0..ENV {
+        for (j, dir) in dirs.iter().enumerate() {
             let e = p * ENV + j;
             let radial = -c.envelope_stiffness * me * (w.rho[e] - w.rho_rest[e]);
             w.rho_force[e] = radial;
-            skel -= dirs[j] * radial;
+            skel -= dir * radial;
         }
-        for j in 0..ENV {
+        for (j, dir) in dirs.iter().enumerate() {
             let k = (j + 1) % ENV;
             let (ej, ek) = (p * ENV + j, p * ENV + k);
             let (rj, rk) = (w.rho[ej], w.rho[ek]);
@@ -107,7 +107,7 @@ pub fn accumulate_forces(w: &mut Wisps, c: &Coeffs) {
             let cc = c.ring_stiffness * me * (d - d0) / d;
             w.rho_force[ej] -= cc * rj;
             w.rho_force[ek] -= cc * rk;
-            skel += (dirs[j] * rj + dirs[k] * rk) * cc;
+            skel += (dir * rj + dirs[k] * rk) * cc;
         }
         w.force[p] += skel;
     }
