@@ -1,5 +1,6 @@
-//! Probe of the layered solver: steps a style under a motion and prints energy, reach and
-//! interaction counts once per simulated second.
+//! Probe of a solver (layered by default): `layered_probe STYLE MOTION SECONDS [MODEL]` steps a
+//! style under a motion and prints energy and interaction counts once per simulated second,
+//! then the wall time per simulated second.
 use std::time::Instant;
 use wisptree::scene::Scene;
 use wisptree::solver::SolverKind;
@@ -10,7 +11,11 @@ fn main() -> anyhow::Result<()> {
     let motion = args.get(2).map(String::as_str).unwrap_or("lean");
     let secs: f64 = args.get(3).and_then(|s| s.parse().ok()).unwrap_or(3.0);
     let t0 = Instant::now();
-    let scene = Scene::load(style, motion, SolverKind::Layered)?;
+    let kind = match args.get(4) {
+        Some(k) => SolverKind::parse(k).map_err(anyhow::Error::msg)?,
+        None => SolverKind::Layered,
+    };
+    let scene = Scene::load(style, motion, kind)?;
     let mut s = scene.solver();
     let build = t0.elapsed();
     let mut r = s.new_report();
@@ -40,9 +45,10 @@ fn main() -> anyhow::Result<()> {
     }
     let wall = t1.elapsed().as_secs_f64();
     println!(
-        "{style}/{motion}: build+settle {:.2}s, {:.0} ms wall per simulated s, dt {} spf {}",
+        "{style}/{motion}/{kind}: build+settle {:.2}s, {:.0} ms wall per simulated s, {:.0} pairs tested per simulated s, dt {} spf {}",
         build.as_secs_f64(),
         wall * 1000.0 / secs,
+        pairs as f64 / secs,
         s.dt(),
         s.steps_per_frame()
     );

@@ -566,3 +566,98 @@ fn bad_layered_values_are_errors_naming_the_field() {
         );
     }
 }
+
+#[test]
+fn strands_are_drawn_in_the_envelope_and_follow_its_compression() {
+    let wisps = [(v(0.0, 1.0, 0.0), v(0.0, -1.0, 0.0), 0.3)];
+    let (_d, scene) = explicit_scene(&wisps, 0.02, "", "jitter: 0.0");
+    let mut s = layered(&scene);
+    s.sync_display();
+    let m = scene.model.clone();
+    let k = m.k;
+    let mut out = Vec::new();
+    // At rest, without jitter, the drawn strands are the styled ones.
+    for st in 0..m.strands.len() {
+        out.clear();
+        s.strand_points(st, &mut out);
+        for (i, x) in out.iter().enumerate() {
+            assert!(
+                (x - m.strands.rest[st * k + i]).norm() < 1e-9,
+                "strand {st} point {i}"
+            );
+        }
+    }
+    // Halving every envelope radius halves every strand's offset across its section.
+    let before: Vec<Vec<Vector3<f64>>> = (0..m.strands.len())
+        .map(|st| {
+            let mut o = Vec::new();
+            s.strand_points(st, &mut o);
+            o
+        })
+        .collect();
+    s.wisps.rho.iter_mut().for_each(|r| *r *= 0.5);
+    let w = &s.wisps;
+    for (st, b) in before.iter().enumerate() {
+        out.clear();
+        s.strand_points(st, &mut out);
+        for (i, (x0, x1)) in b.iter().zip(&out).enumerate() {
+            let (p, t) = (w.pos[i], w.t[i]);
+            let across = |x: &Vector3<f64>| (x - p) - t * (x - p).dot(&t);
+            assert!(
+                (across(x1) - across(x0) * 0.5).norm() < 1e-9,
+                "strand {st} point {i}"
+            );
+        }
+    }
+}
+
+#[test]
+fn jittered_strands_stay_inside_the_envelope() {
+    let (_d, scene) = scene_with("long_curly", "shake", "level: 0, jitter: 0.5", "");
+    let mut s = layered(&scene);
+    run(&mut s, 0.3);
+    s.sync_display();
+    let (m, w) = (scene.model.clone(), &s.wisps);
+    let mut out = Vec::new();
+    for st in (0..m.strands.len()).step_by(7) {
+        out.clear();
+        s.strand_points(st, &mut out);
+        let wi = s.strand_wisp(st);
+        for (i, x) in out.iter().enumerate() {
+            let p = w.start[wi] as usize + i;
+            let r = (x - w.pos[p]) - w.t[p] * (x - w.pos[p]).dot(&w.t[p]);
+            let radius = wisptree::solver::layered::detect::section_radius(w, p, &r);
+            assert!(
+                r.norm() <= radius * 1.0001,
+                "strand {st} point {i} outside the envelope"
+            );
+        }
+    }
+}
+
+#[test]
+fn a_frame_shows_skeleton_envelope_sections_strands_and_stats() {
+    let scene = Scene::load("short", "lean", SolverKind::Layered).expect("short");
+    let mut s = scene.solver();
+    let mut r = s.new_report();
+    for _ in 0..s.steps_per_frame() {
+        s.step(&mut r);
+    }
+    let mut fb = wisptree::frame::FrameBuilder::new(&scene.model, 50, 2);
+    let mut f = wisptree::frame::Frame::default();
+    fb.fill(s.as_mut(), &mut f);
+    assert_eq!(f.solver, "layered");
+    let n = f.nodes.positions.len();
+    assert!(n > 0 && f.segments.starts.len() < n);
+    let set = |path: &str| f.extras.iter().find(|e| e.path == path).expect(path);
+    assert_eq!(set("/hair/layered/envelope").len(), n * ENV);
+    assert_eq!(set("/hair/layered/sections").len(), n);
+    assert_eq!(f.strands.len(), 50);
+    for path in [
+        "/stats/interpenetrating_pairs",
+        "/stats/collisions",
+        "/stats/body_contacts",
+    ] {
+        assert!(r.stats.iter().any(|st| st.path == path), "{path}");
+    }
+}

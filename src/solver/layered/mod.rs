@@ -133,6 +133,11 @@ impl LayeredSolver {
         self.level
     }
 
+    /// The wisp that draws strand `s`.
+    pub fn strand_wisp(&self, s: usize) -> usize {
+        self.strand_map.wisp[s] as usize
+    }
+
     /// Main steps between two interaction steps, and between two body steps.
     pub fn rates(&self) -> (u64, u64) {
         (self.interaction_every, self.body_every)

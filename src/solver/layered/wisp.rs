@@ -90,8 +90,7 @@ impl Wisps {
     }
 
     /// Builds one wisp per GC of level `level` at rest: the skeleton on the GC's nodes, the
-    /// envelope on the extent of its strands in each section (at least `floor` × the GC's
-    /// radius).
+    /// envelope around its strands in each section (at least 0.3 × the GC's radius).
     pub fn build(model: &HairModel, level: usize) -> Wisps {
         let k = model.k;
         let lv = &model.levels[level];
@@ -174,6 +173,25 @@ impl Wisps {
                     rho[p * ENV + j] = rho[p * ENV + j].max(floor);
                 }
             }
+        }
+        // The envelope is the ellipse quadrants through the 4 points (§6, Fig. 4): widen a
+        // section until it encloses every strand point of it, not only their extents along the
+        // 4 half-lines.
+        let mut widen = vec![1.0f64; n];
+        for s in 0..model.strands.len() {
+            let g = ancestor(model, finest, model.strands.finest_gc[s] as usize, level);
+            for i in 0..k {
+                let p = w.start[g] as usize + i;
+                let off = model.strands.rest[s * k + i] - w.rest_pos[p];
+                let (x, y) = (off.dot(&w.env_dir(p, 0)), off.dot(&w.env_dir(p, 1)));
+                let r = &rho[p * ENV..p * ENV + ENV];
+                let rx = if x >= 0.0 { r[0] } else { r[2] };
+                let ry = if y >= 0.0 { r[1] } else { r[3] };
+                widen[p] = widen[p].max(((x / rx).powi(2) + (y / ry).powi(2)).sqrt());
+            }
+        }
+        for (p, f) in widen.iter().enumerate() {
+            rho[p * ENV..p * ENV + ENV].iter_mut().for_each(|r| *r *= f);
         }
         w.rho_rest = rho.clone();
         w.rho = rho;
