@@ -284,12 +284,12 @@ impl Solver for LayeredSolver {
         }
         // 4. Positions, then position modifications.
         forces::integrate_positions(w, dt);
-        w.compute_frames(&self.pose);
         if body_step {
+            // The reaction moves envelope points along their half-lines in the new sections
+            // (the next step's forces and `sync_display` recompute the frames anyway).
+            w.compute_frames(&self.pose);
             let margin = 0.9 * lp.body_threshold;
-            if body::penetration_reaction(w, &self.balls, &self.pose, margin) > 0 {
-                w.compute_frames(&self.pose);
-            }
+            body::penetration_reaction(w, &self.balls, &self.pose, margin);
         }
         self.time = t_new;
         self.steps += 1;
