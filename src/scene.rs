@@ -78,6 +78,12 @@ impl Scene {
     pub fn solver_with(&self, params: &SimParams) -> Box<dyn Solver> {
         match self.solver {
             SolverKind::Awt | SolverKind::SingleLevel => Box::new(self.awt_with(params)),
+            SolverKind::Layered => Box::new(crate::solver::layered::LayeredSolver::new(
+                self.model.clone(),
+                self.motion.clone(),
+                params,
+                &self.loaded.style,
+            )),
         }
     }
 

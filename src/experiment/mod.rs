@@ -6,6 +6,9 @@
 //! app's sink logs it to Rerun under `/runs/<label>/…`, a test's sink does nothing. Experiments
 //! never name Rerun.
 
+pub mod awt_fig5;
+pub mod plante;
+
 use crate::solver::{AdaptEvent, Solver};
 
 /// Where an experiment's frames go.
@@ -76,7 +79,11 @@ pub struct ExperimentDef {
 
 /// Every experiment, in `--list` order.
 pub fn all() -> Vec<&'static ExperimentDef> {
-    Vec::new()
+    vec![
+        &plante::PLANTE_FIG8,
+        &plante::PLANTE_FIG9,
+        &awt_fig5::AWT_FIG5,
+    ]
 }
 
 /// The experiment called `name`.

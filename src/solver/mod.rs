@@ -12,6 +12,9 @@
 //! |---|---|---|
 //! | `awt` | Bertails, Kim, Cani, Neumann 2003, *Adaptive Wisp Tree* | [`crate::sim`] |
 //! | `single-level` | the same, every finest node active, no adaptation (its §5.2) | [`crate::sim`] |
+//! | `layered` | Plante, Cani, Poulin 2002, *Capturing the Complexity of Hair Motion* | [`layered`] |
+
+pub mod layered;
 
 use std::sync::Arc;
 
@@ -34,17 +37,25 @@ pub enum SolverKind {
     /// The AWT with every finest node active and no adaptation (the AWT paper's §5.2
     /// comparison).
     SingleLevel,
+    /// The layered wisp model (Plante, Cani, Poulin 2002): skeleton, envelope, anisotropic
+    /// interactions.
+    Layered,
 }
 
 impl SolverKind {
     /// Every solver, in the order `--help` lists them.
-    pub const ALL: &'static [SolverKind] = &[SolverKind::Awt, SolverKind::SingleLevel];
+    pub const ALL: &'static [SolverKind] = &[
+        SolverKind::Awt,
+        SolverKind::SingleLevel,
+        SolverKind::Layered,
+    ];
 
     /// The name on the command line and in the bench's JSON.
     pub fn name(self) -> &'static str {
         match self {
             SolverKind::Awt => "awt",
             SolverKind::SingleLevel => "single-level",
+            SolverKind::Layered => "layered",
         }
     }
 
@@ -53,6 +64,7 @@ impl SolverKind {
     pub fn path_segment(self) -> &'static str {
         match self {
             SolverKind::Awt | SolverKind::SingleLevel => "awt",
+            SolverKind::Layered => "layered",
         }
     }
 
@@ -61,6 +73,9 @@ impl SolverKind {
         match self {
             SolverKind::Awt => "Adaptive Wisp Tree (Bertails et al. 2003): wisps split and merge",
             SolverKind::SingleLevel => "the AWT with every finest node active, no adaptation",
+            SolverKind::Layered => {
+                "layered wisps (Plante, Cani, Poulin 2002): skeleton, envelope, anisotropic interactions"
+            }
         }
     }
 

@@ -120,7 +120,9 @@ pub fn parse(path: &Path, text: &str) -> Result<LoadedStyle, StyleError> {
             }
             None => style.head.body.clone(),
         },
-        Hair::Generated(_) | Hair::HairFile(_) | Hair::HairSalon(_) => style.head.body.clone(),
+        Hair::Generated(_) | Hair::HairFile(_) | Hair::HairSalon(_) | Hair::Explicit(_) => {
+            style.head.body.clone()
+        }
     };
     let mut loaded = LoadedStyle {
         path: path.to_path_buf(),
@@ -217,8 +219,28 @@ impl LoadedStyle {
                 }
                 Ok(hair)
             }
+            Hair::Explicit(e) => Ok(explicit_hair(e)),
         }
     }
+}
+
+/// The strands of explicitly given hair, one top-level wisp per given wisp.
+fn explicit_hair(e: &Explicit) -> RawHair {
+    let mut hair = RawHair::default();
+    for (n, w) in e.wisps.iter().enumerate() {
+        hair.wisp_names.push(if w.name.is_empty() {
+            format!("wisp {n}")
+        } else {
+            w.name.clone()
+        });
+        for st in &w.strands {
+            hair.strands.push(RawStrand {
+                wisp: n as u32,
+                points: st.clone(),
+            });
+        }
+    }
+    hair
 }
 
 /// Best-effort line number of the first `leaf:` of a dotted field path in the text.
@@ -481,6 +503,37 @@ pub fn validate(style: &Style) -> Result<(), Invalid> {
             positive(f.scale, "hair.scale")?;
             finite3(&f.translate, "hair.translate")?;
         }
+        Hair::Explicit(e) => {
+            check(!e.wisps.is_empty(), "hair.wisps", || {
+                "needs at least one wisp".into()
+            })?;
+            for (n, w) in e.wisps.iter().enumerate() {
+                let f = format!("hair.wisps[{n}].strands");
+                check(!w.strands.is_empty(), &f, || {
+                    "needs at least one strand".into()
+                })?;
+                for (k, st) in w.strands.iter().enumerate() {
+                    let fk = format!("{f}[{k}]");
+                    check(st.len() >= 2, &fk, || {
+                        format!("a strand needs at least 2 points, got {}", st.len())
+                    })?;
+                    for p in st {
+                        finite3(p, &fk)?;
+                    }
+                }
+            }
+        }
     }
+    style.layered.validate()?;
+    check(
+        style.layered.level < style.hierarchy.levels.max(1) || style.layered.level == 1,
+        "layered.level",
+        || {
+            format!(
+                "the hierarchy has levels 0..{}, got {}",
+                style.hierarchy.levels, style.layered.level
+            )
+        },
+    )?;
     Ok(())
 }

@@ -35,6 +35,10 @@ pub struct Style {
     /// Simulation parameters. Default: [`SimParams::default`].
     #[serde(default)]
     pub sim: SimParams,
+    /// Parameters of the layered wisp model (`--model layered`). Default:
+    /// [`LayeredParams::default`].
+    #[serde(default)]
+    pub layered: crate::solver::layered::LayeredParams,
 }
 
 fn default_seed() -> u64 {
@@ -134,6 +138,29 @@ pub enum Hair {
     HairFile(StrandFile),
     /// Strands read from a USC-HairSalon `.data` file.
     HairSalon(StrandFile),
+    /// Strands given point by point, grouped into top-level wisps (the papers' head-less
+    /// scenes: two wisps balancing, Plante, Cani, Poulin 2002, §7.1). Roots are pinned to the
+    /// (still or moving) body frame like every root.
+    Explicit(Explicit),
+}
+
+/// Hair given explicitly: `Explicit((wisps: [(name: "a", strands: [[(x, y, z), ...]])]))`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Explicit {
+    /// The top-level wisps, each a group of strands.
+    pub wisps: Vec<ExplicitWisp>,
+}
+
+/// One explicitly given wisp.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ExplicitWisp {
+    /// Display name. Default: `wisp <n>`.
+    #[serde(default)]
+    pub name: String,
+    /// Its strands, each a polyline of world points, root first (at least 2 points).
+    pub strands: Vec<Vec<Vec3>>,
 }
 
 /// Generated hair: wisps on scalp regions, plus copies and mirror images of them.

@@ -1,0 +1,201 @@
+//! Forces and explicit Euler integration of the wisps (Plante, Cani, Poulin 2002, §3.2–3.4,
+//! §5.1–5.2): gravity, skeleton springs (linear and angular), the envelope's radial and ring
+//! springs; velocities then velocity modifications (spring damping, air drag), then positions.
+//! Each wisp is processed root to tip, the skeleton point before its envelope points, so an
+//! envelope point reacts to its skeleton point's new acceleration (§3.4).
+
+use nalgebra::Vector3;
+
+use super::wisp::{Wisps, ENV, MIN_RHO_FRACTION};
+use crate::sim::dynamics::damp_relative;
+
+/// Mass standing for "kinematic" (the root, which the head moves) in the §5.2 mass shares.
+pub const KINEMATIC_MASS: f64 = 1e30;
+
+/// The coefficients the integration needs, resolved from the style once.
+#[derive(Debug, Clone, Copy)]
+pub struct Coeffs {
+    /// Gravity, m/s².
+    pub gravity: Vector3<f64>,
+    /// Air drag rate, s⁻¹.
+    pub air_drag: f64,
+    /// Wind velocity (steady part), m/s.
+    pub wind: Vector3<f64>,
+    /// Linear spring stiffness per kilogram, s⁻².
+    pub stiffness: f64,
+    /// Linear spring damping ν, s⁻¹.
+    pub damping: f64,
+    /// Angular spring stiffness per kilogram, s⁻².
+    pub bending: f64,
+    /// Angular damping ν, s⁻¹.
+    pub bending_damping: f64,
+    /// Envelope point mass over its skeleton point's.
+    pub envelope_mass: f64,
+    /// Radial spring per kilogram, s⁻².
+    pub envelope_stiffness: f64,
+    /// Ring spring per kilogram, s⁻².
+    pub ring_stiffness: f64,
+    /// Envelope damping ν, s⁻¹.
+    pub envelope_damping: f64,
+}
+
+#[inline]
+fn is_root(w: &Wisps, p: usize) -> bool {
+    w.start[w.wisp_of[p] as usize] as usize == p
+}
+
+#[inline]
+fn is_tip(w: &Wisps, p: usize) -> bool {
+    w.start[w.wisp_of[p] as usize + 1] as usize == p + 1
+}
+
+/// §5.1 item 1: every force, from the current positions and frames.
+pub fn accumulate_forces(w: &mut Wisps, c: &Coeffs) {
+    let n = w.point_count();
+    for (f, m) in w.force.iter_mut().zip(&w.mass) {
+        *f = c.gravity * *m;
+    }
+    for p in 0..n {
+        if is_tip(w, p) {
+            continue;
+        }
+        let q = p + 1;
+        let s = w.pos[q] - w.pos[p];
+        let len = s.norm();
+        if len < 1e-12 {
+            continue;
+        }
+        let d = s / len;
+        let m = w.mass[p].min(w.mass[q]);
+        // Linear spring (§3.2).
+        let f = d * (-c.stiffness * m * (len - w.rest_len[p]));
+        // Angular spring (§3.2): the segment is pulled towards its rest direction expressed in
+        // its start's twist-free section frame; only the part across the segment bends it.
+        let v = w.t[p].cross(&w.u[p]);
+        let rd = w.rest_dir[p];
+        let target = (w.t[p] * rd.x + w.u[p] * rd.y + v * rd.z) * len;
+        let diff = target - s;
+        let bend = (diff - d * diff.dot(&d)) * (c.bending * w.mass[q]);
+        w.force[q] += f + bend;
+        w.force[p] -= f + bend;
+    }
+    // Envelope (§3.3): radial springs to the skeleton point, ring springs between neighbours
+    // of a section. The part of a ring force across an envelope point's half-line is the
+    // constraint's reaction: it goes to the skeleton point.
+    for p in 0..n {
+        let me = c.envelope_mass * w.mass[p];
+        let mut skel = Vector3::zeros();
+        let mut dirs = [Vector3::zeros(); ENV];
+        for (j, d) in dirs.iter_mut().enumerate() {
+            *d = w.env_dir(p, j);
+        }
+        for (j, dir) in dirs.iter().enumerate() {
+            let e = p * ENV + j;
+            let radial = -c.envelope_stiffness * me * (w.rho[e] - w.rho_rest[e]);
+            w.rho_force[e] = radial;
+            skel -= dir * radial;
+        }
+        for (j, dir) in dirs.iter().enumerate() {
+            let k = (j + 1) % ENV;
+            let (ej, ek) = (p * ENV + j, p * ENV + k);
+            let (rj, rk) = (w.rho[ej], w.rho[ek]);
+            let d = (rj * rj + rk * rk).sqrt();
+            let d0 = (w.rho_rest[ej].powi(2) + w.rho_rest[ek].powi(2)).sqrt();
+            if d < 1e-12 {
+                continue;
+            }
+            let cc = c.ring_stiffness * me * (d - d0) / d;
+            w.rho_force[ej] -= cc * rj;
+            w.rho_force[ek] -= cc * rk;
+            skel += (dir * rj + dirs[k] * rk) * cc;
+        }
+        w.force[p] += skel;
+    }
+}
+
+/// §5.1 item 3: new velocities from the forces, then the velocity modifications of the springs'
+/// damping and of the air drag (§5.2: each reduces a relative velocity, never reverses it).
+pub fn integrate_velocities(w: &mut Wisps, c: &Coeffs, dt: f64) {
+    for wi in 0..w.len() {
+        let r = w.points(wi);
+        // The angular damper damps the rate of change of the bend: the velocity of a segment's
+        // end across it, relative to what a rigid continuation of the previous segment would
+        // give (the first segment continues the head-fixed one from the anchor).
+        let mut prev_rel = w.vel[r.start] - w.anchor_vel[wi];
+        let mut prev_len = (w.pos[r.start] - w.anchor[wi]).norm().max(1e-9);
+        for p in r.clone() {
+            let root = p == r.start;
+            if !root {
+                let m = w.mass[p];
+                w.vel[p] += w.force[p] * (dt / m);
+                let q = p - 1;
+                let s = w.pos[p] - w.pos[q];
+                let len = s.norm().max(1e-9);
+                let d = s / len;
+                let mq = if q == r.start {
+                    KINEMATIC_MASS
+                } else {
+                    w.mass[q]
+                };
+                // Linear spring damping along the segment (§5.2).
+                let (vq, vp) = (w.vel[q], w.vel[p]);
+                let (dq1, dp1) =
+                    damp_relative(d * vq.dot(&d), mq, d * vp.dot(&d), m, c.damping, dt);
+                // Angular spring damping across it, about the rigid continuation.
+                let rel = vp - vq;
+                let expected = prev_rel * (len / prev_len);
+                let dev = (rel - expected) - d * (rel - expected).dot(&d);
+                let (dq2, dp2) = damp_relative(Vector3::zeros(), mq, dev, m, c.bending_damping, dt);
+                w.vel[p] += dp1 + dp2;
+                if q != r.start {
+                    w.vel[q] += dq1 + dq2;
+                }
+                let f = (c.air_drag * dt).min(1.0);
+                let drag = (w.vel[p] - c.wind) * f;
+                w.vel[p] -= drag;
+                prev_rel = w.vel[p] - w.vel[q];
+                prev_len = len;
+            }
+            integrate_envelope(w, c, p, root, dt);
+        }
+    }
+}
+
+/// The envelope of skeleton point `p`, after it: the radial equation in the frame of the
+/// (accelerating) skeleton point, then the §5.2 damping of the radial springs.
+fn integrate_envelope(w: &mut Wisps, c: &Coeffs, p: usize, root: bool, dt: f64) {
+    let ms = if root { KINEMATIC_MASS } else { w.mass[p] };
+    let me = c.envelope_mass * w.mass[p];
+    let acc = (w.vel[p] - w.prev_vel[p]) / dt;
+    for j in 0..ENV {
+        let e = p * ENV + j;
+        let dir = w.env_dir(p, j);
+        w.rho_rate[e] += (w.rho_force[e] / me + (c.gravity - acc).dot(&dir)) * dt;
+        let vs = dir * w.vel[p].dot(&dir);
+        let ve = vs + dir * w.rho_rate[e];
+        let (dvs, dve) = damp_relative(vs, ms, ve, me, c.envelope_damping, dt);
+        w.rho_rate[e] += dve.dot(&dir) - dvs.dot(&dir);
+        if !root {
+            w.vel[p] += dvs;
+        }
+    }
+}
+
+/// §5.1 item 4: new positions from the new velocities (the roots are placed by the pose). The
+/// envelope radius stays positive: a crushed section stops at [`MIN_RHO_FRACTION`] of its rest
+/// radius.
+pub fn integrate_positions(w: &mut Wisps, dt: f64) {
+    for p in 0..w.point_count() {
+        if !is_root(w, p) {
+            w.pos[p] += w.vel[p] * dt;
+        }
+    }
+    for e in 0..w.rho.len() {
+        w.rho[e] += w.rho_rate[e] * dt;
+        let lo = MIN_RHO_FRACTION * w.rho_rest[e];
+        if w.rho[e] < lo {
+            w.rho[e] = lo;
+            w.rho_rate[e] = w.rho_rate[e].max(0.0);
+        }
+    }
+}

@@ -1,0 +1,261 @@
+//! The `layered:` section of a style: every parameter of the layered wisp model (Plante, Cani,
+//! Poulin 2002) that the AWT's `sim:` section does not already give (gravity, air drag, wind,
+//! total mass and the displayed frame length are taken from `sim:`).
+
+use serde::{Deserialize, Serialize};
+
+/// Parameters of the layered wisp model. Rates and stiffnesses are per kilogram (s⁻² for
+/// springs, s⁻¹ for damping and drag), so they do not depend on the hair's mass.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LayeredParams {
+    /// Level of the style's GC hierarchy whose GCs become layered wisps (0 = coarsest). It
+    /// must exist in `hierarchy.levels`, except the default 1, which means the finest level of
+    /// a one-level hierarchy. Default 1.
+    #[serde(default = "d_level")]
+    pub level: usize,
+    /// Integration rate, Hz (§7.2: 1000). Default 1000.
+    #[serde(default = "d_rate")]
+    pub rate: f64,
+    /// Rate of body collision processing, Hz (§7.2: 120). Default 120.
+    #[serde(default = "d_body_rate")]
+    pub body_rate: f64,
+    /// Rate of wisp–wisp interaction processing, Hz (§7.2: 24). Default 24.
+    #[serde(default = "d_interaction_rate")]
+    pub interaction_rate: f64,
+    /// Stiffness of the skeleton's linear springs, per kilogram of the lighter end, s⁻²
+    /// (§3.2: stiff for straight hair, soft for wavy hair). Default: 1e5 for rigid-link styles,
+    /// 2e4 for spring-link (curly) styles.
+    #[serde(default)]
+    pub stiffness: Option<f64>,
+    /// Damping ν of the skeleton's linear springs, s⁻¹ (a §5.2 velocity modification).
+    /// Default 100.
+    #[serde(default = "d_damping")]
+    pub damping: f64,
+    /// Stiffness of the angular springs, per kilogram, s⁻² (§3.2: "a slight resistance to
+    /// bending"). Default 400.
+    #[serde(default = "d_bending")]
+    pub bending: f64,
+    /// Damping of the angular springs (relative velocity across a segment), s⁻¹. Default 20.
+    #[serde(default = "d_bending_damping")]
+    pub bending_damping: f64,
+    /// Mass of one envelope point over its skeleton point's (§3.3: "about 1/100").
+    /// Default 0.01.
+    #[serde(default = "d_envelope_mass")]
+    pub envelope_mass: f64,
+    /// Radial spring from an envelope point to its skeleton point, per kilogram, s⁻² (§3.3:
+    /// soft: an envelope point sags by g / stiffness across the wisp under gravity). Default
+    /// 4000.
+    #[serde(default = "d_envelope_stiffness")]
+    pub envelope_stiffness: f64,
+    /// Springs between neighbouring envelope points of one section, per kilogram, s⁻².
+    /// Default 2000.
+    #[serde(default = "d_ring_stiffness")]
+    pub ring_stiffness: f64,
+    /// Damping ν of the envelope springs, s⁻¹ (§3.3: highly damped). Default 200.
+    #[serde(default = "d_envelope_damping")]
+    pub envelope_damping: f64,
+    /// Process wisp–wisp interactions at all (§7.1, Fig. 8 first row: off). Default true.
+    #[serde(default = "d_true")]
+    pub interactions: bool,
+    /// Allow the dissipative collision of §4.2.2 (off: every pair in contact interpenetrates).
+    /// Default true.
+    #[serde(default = "d_true")]
+    pub collisions: bool,
+    /// Largest angle between the relative velocity and the two segments' plane for which they
+    /// interpenetrate, degrees (§7.1: 25). Default 25.
+    #[serde(default = "d_interpenetration_angle")]
+    pub interpenetration_angle: f64,
+    /// Viscosity ν of the in-plane drag between interpenetrating wisps, s⁻¹ per unit relative
+    /// density (§4.2.1; Fig. 9 uses 0.5 and 50). 0 turns the drag off. Default 10.
+    #[serde(default = "d_viscosity")]
+    pub viscosity: f64,
+    /// Sliding contact distance from the body's surface, m (§4.3.1). Default 0.005.
+    #[serde(default = "d_body_threshold")]
+    pub body_threshold: f64,
+    /// Tangential viscous friction against the body, s⁻¹ (§4.3.1). Default 20.
+    #[serde(default = "d_body_friction")]
+    pub body_friction: f64,
+    /// Jitter of drawn strands towards the skeleton (§6): each strand's section coordinates
+    /// are scaled by a fixed factor in [1 − jitter, 1]. Default 0.2.
+    #[serde(default = "d_jitter")]
+    pub jitter: f64,
+}
+
+impl Default for LayeredParams {
+    fn default() -> Self {
+        LayeredParams {
+            level: d_level(),
+            rate: d_rate(),
+            body_rate: d_body_rate(),
+            interaction_rate: d_interaction_rate(),
+            stiffness: None,
+            damping: d_damping(),
+            bending: d_bending(),
+            bending_damping: d_bending_damping(),
+            envelope_mass: d_envelope_mass(),
+            envelope_stiffness: d_envelope_stiffness(),
+            ring_stiffness: d_ring_stiffness(),
+            envelope_damping: d_envelope_damping(),
+            interactions: true,
+            collisions: true,
+            interpenetration_angle: d_interpenetration_angle(),
+            viscosity: d_viscosity(),
+            body_threshold: d_body_threshold(),
+            body_friction: d_body_friction(),
+            jitter: d_jitter(),
+        }
+    }
+}
+
+fn d_level() -> usize {
+    1
+}
+fn d_rate() -> f64 {
+    1000.0
+}
+fn d_body_rate() -> f64 {
+    120.0
+}
+fn d_interaction_rate() -> f64 {
+    24.0
+}
+fn d_damping() -> f64 {
+    100.0
+}
+fn d_bending() -> f64 {
+    400.0
+}
+fn d_bending_damping() -> f64 {
+    20.0
+}
+fn d_envelope_mass() -> f64 {
+    0.01
+}
+fn d_envelope_stiffness() -> f64 {
+    4000.0
+}
+fn d_ring_stiffness() -> f64 {
+    2000.0
+}
+fn d_envelope_damping() -> f64 {
+    200.0
+}
+fn d_true() -> bool {
+    true
+}
+fn d_interpenetration_angle() -> f64 {
+    25.0
+}
+fn d_viscosity() -> f64 {
+    10.0
+}
+fn d_body_threshold() -> f64 {
+    0.005
+}
+fn d_body_friction() -> f64 {
+    20.0
+}
+fn d_jitter() -> f64 {
+    0.2
+}
+
+/// Stiffness used when the style gives none: stiff for straight (rigid-link) hair, soft for
+/// curly (spring-link) hair (§3.2, §6: wavy wisps use "the same wisp sections, simply reducing
+/// the stiffness of the skeletal springs").
+pub fn default_stiffness(link: &crate::style::Link) -> f64 {
+    match link {
+        crate::style::Link::Rigid { .. } => 1e5,
+        crate::style::Link::Spring { .. } => 2e4,
+    }
+}
+
+impl LayeredParams {
+    /// Checks every value; returns the dotted field path (`layered.rate`) and the reason.
+    pub fn validate(&self) -> Result<(), (String, String)> {
+        let f = |name: &str| format!("layered.{name}");
+        let pos = |v: f64, name: &str| -> Result<(), (String, String)> {
+            if v.is_finite() && v > 0.0 {
+                Ok(())
+            } else {
+                Err((f(name), format!("must be a positive number, got {v}")))
+            }
+        };
+        let nonneg = |v: f64, name: &str| -> Result<(), (String, String)> {
+            if v.is_finite() && v >= 0.0 {
+                Ok(())
+            } else {
+                Err((f(name), format!("must be zero or positive, got {v}")))
+            }
+        };
+        pos(self.rate, "rate")?;
+        if self.rate > 100_000.0 {
+            return Err((f("rate"), format!("at most 100000 Hz, got {}", self.rate)));
+        }
+        pos(self.body_rate, "body_rate")?;
+        pos(self.interaction_rate, "interaction_rate")?;
+        for (v, n) in [
+            (self.body_rate, "body_rate"),
+            (self.interaction_rate, "interaction_rate"),
+        ] {
+            if v > self.rate {
+                return Err((
+                    f(n),
+                    format!(
+                        "must not exceed the integration rate {} Hz, got {v}",
+                        self.rate
+                    ),
+                ));
+            }
+        }
+        if let Some(k) = self.stiffness {
+            pos(k, "stiffness")?;
+            // Explicit Euler on a chain: stable while 2·sqrt(k)·dt < 2 (k per kilogram).
+            if 4.0 * k / (self.rate * self.rate) >= 4.0 {
+                return Err((
+                    f("stiffness"),
+                    format!(
+                        "explicit Euler at {} Hz is unstable above {} s⁻², got {k}",
+                        self.rate,
+                        self.rate * self.rate
+                    ),
+                ));
+            }
+        }
+        nonneg(self.damping, "damping")?;
+        nonneg(self.bending, "bending")?;
+        nonneg(self.bending_damping, "bending_damping")?;
+        pos(self.envelope_mass, "envelope_mass")?;
+        if self.envelope_mass > 1.0 {
+            return Err((
+                f("envelope_mass"),
+                format!(
+                    "an envelope point weighs at most its skeleton point, got {}",
+                    self.envelope_mass
+                ),
+            ));
+        }
+        nonneg(self.envelope_stiffness, "envelope_stiffness")?;
+        nonneg(self.ring_stiffness, "ring_stiffness")?;
+        nonneg(self.envelope_damping, "envelope_damping")?;
+        if !(0.0..=90.0).contains(&self.interpenetration_angle) {
+            return Err((
+                f("interpenetration_angle"),
+                format!(
+                    "must be between 0 and 90 degrees, got {}",
+                    self.interpenetration_angle
+                ),
+            ));
+        }
+        nonneg(self.viscosity, "viscosity")?;
+        nonneg(self.body_threshold, "body_threshold")?;
+        nonneg(self.body_friction, "body_friction")?;
+        if !(0.0..=1.0).contains(&self.jitter) {
+            return Err((
+                f("jitter"),
+                format!("must be in [0, 1], got {}", self.jitter),
+            ));
+        }
+        Ok(())
+    }
+}
