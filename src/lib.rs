@@ -16,6 +16,7 @@ pub mod experiment;
 pub mod frame;
 pub mod model;
 pub mod motion;
+pub mod render;
 pub mod run;
 pub mod scene;
 pub mod sim;

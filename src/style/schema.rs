@@ -34,6 +34,10 @@ pub struct Style {
     /// Simulation parameters. Default: [`SimParams::default`].
     #[serde(default)]
     pub sim: SimParams,
+    /// How the hair is rendered (shading, shadows, antialiasing). Default:
+    /// [`crate::render::RenderParams::default`].
+    #[serde(default)]
+    pub render: crate::render::RenderParams,
 }
 
 fn default_seed() -> u64 {

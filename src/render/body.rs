@@ -1,0 +1,136 @@
+//! The head and body: the `BodyBuf` spheres and the scalp ellipsoid, ray cast per sample as
+//! opaque surfaces (they hide the hair behind them and receive its shadow).
+
+use super::camera::{add, dot, normalize, scale, sub, View, NEAR};
+use crate::frame::BodyBuf;
+
+/// One body primitive of the frame: an ellipsoid (a sphere has equal radii), in the world.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Prim {
+    center: [f32; 3],
+    /// Rows of the world → local rotation (the local axes in world coordinates).
+    axes: [[f32; 3]; 3],
+    inv_radii: [f32; 3],
+    /// Screen bounds in samples: x0, y0, x1, y1.
+    pub rect: [f32; 4],
+}
+
+fn rotate(q: [f32; 4], v: [f32; 3]) -> [f32; 3] {
+    // v' = v + 2w(u × v) + 2u × (u × v), with q = (u, w).
+    let u = [q[0], q[1], q[2]];
+    let t = scale(super::camera::cross(u, v), 2.0);
+    add(add(v, scale(t, q[3])), super::camera::cross(u, t))
+}
+
+impl Prim {
+    fn new(center: [f32; 3], radii: [f32; 3], rot: [f32; 4], view: &View, w: f32, h: f32) -> Prim {
+        let n = rot.iter().map(|x| x * x).sum::<f32>().sqrt();
+        let q = if n > 0.0 {
+            [rot[0] / n, rot[1] / n, rot[2] / n, rot[3] / n]
+        } else {
+            [0.0, 0.0, 0.0, 1.0]
+        };
+        let axes = [
+            rotate(q, [1.0, 0.0, 0.0]),
+            rotate(q, [0.0, 1.0, 0.0]),
+            rotate(q, [0.0, 0.0, 1.0]),
+        ];
+        let r = radii[0].max(radii[1]).max(radii[2]);
+        // The projection of the bounding cube's corners bounds the projection of the surface.
+        let mut rect = [
+            f32::INFINITY,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+            f32::NEG_INFINITY,
+        ];
+        let mut behind = false;
+        for c in 0..8 {
+            let s = |b: usize| if c & (1 << b) != 0 { r } else { -r };
+            let p = add(center, [s(0), s(1), s(2)]);
+            let q = view.project(p);
+            if q[2] <= NEAR {
+                behind = true;
+            }
+            rect = [
+                rect[0].min(q[0]),
+                rect[1].min(q[1]),
+                rect[2].max(q[0]),
+                rect[3].max(q[1]),
+            ];
+        }
+        if behind {
+            rect = [0.0, 0.0, w, h];
+        }
+        Prim {
+            center,
+            axes,
+            inv_radii: radii.map(|x| 1.0 / x.max(1e-6)),
+            rect,
+        }
+    }
+
+    fn local(&self, v: [f32; 3]) -> [f32; 3] {
+        [
+            dot(self.axes[0], v) * self.inv_radii[0],
+            dot(self.axes[1], v) * self.inv_radii[1],
+            dot(self.axes[2], v) * self.inv_radii[2],
+        ]
+    }
+
+    /// The nearest hit of ray eye + t·d with t > NEAR, if any.
+    #[inline]
+    pub fn hit(&self, eye: [f32; 3], d: [f32; 3]) -> Option<f32> {
+        let o = self.local(sub(eye, self.center));
+        let dl = self.local(d);
+        let a = dot(dl, dl);
+        let b = dot(o, dl);
+        let c = dot(o, o) - 1.0;
+        let disc = b * b - a * c;
+        if disc < 0.0 {
+            return None;
+        }
+        let sq = disc.sqrt();
+        let t0 = (-b - sq) / a;
+        if t0 > NEAR {
+            return Some(t0);
+        }
+        let t1 = (-b + sq) / a;
+        (t1 > NEAR).then_some(t1)
+    }
+
+    /// The unit outward normal at surface point `p`.
+    pub fn normal(&self, p: [f32; 3]) -> [f32; 3] {
+        let l = self.local(sub(p, self.center));
+        // Gradient of |local|²: axes_i · l_i / r_i.
+        let g = [
+            l[0] * self.inv_radii[0],
+            l[1] * self.inv_radii[1],
+            l[2] * self.inv_radii[2],
+        ];
+        normalize(add(
+            add(scale(self.axes[0], g[0]), scale(self.axes[1], g[1])),
+            scale(self.axes[2], g[2]),
+        ))
+    }
+}
+
+/// Fills `out` with the frame's primitives: the body spheres, then the scalp ellipsoid.
+pub(crate) fn prims(body: &BodyBuf, view: &View, w: f32, h: f32, out: &mut Vec<Prim>) {
+    out.clear();
+    let id = [0.0, 0.0, 0.0, 1.0];
+    for (c, r) in body.sphere_centers.iter().zip(&body.sphere_radii) {
+        if *r > 0.0 {
+            out.push(Prim::new(*c, [*r; 3], id, view, w, h));
+        }
+    }
+    if body.scalp_radii.iter().all(|r| *r > 0.0) {
+        out.push(Prim::new(
+            body.scalp_center,
+            body.scalp_radii,
+            body.scalp_rotation,
+            view,
+            w,
+            h,
+        ));
+    }
+}
