@@ -77,25 +77,17 @@ impl Prim {
         ]
     }
 
-    /// The nearest hit of ray eye + t·d with t > NEAR, if any.
-    #[inline]
-    pub fn hit(&self, eye: [f32; 3], d: [f32; 3]) -> Option<f32> {
+    /// The rays of a tile, in this primitive's local frame: ray (i, j) has direction
+    /// `d00 + i·dx + j·dy` from `eye`.
+    pub fn rays(&self, eye: [f32; 3], d00: [f32; 3], dx: [f32; 3], dy: [f32; 3]) -> TileRays {
         let o = self.local(sub(eye, self.center));
-        let dl = self.local(d);
-        let a = dot(dl, dl);
-        let b = dot(o, dl);
-        let c = dot(o, o) - 1.0;
-        let disc = b * b - a * c;
-        if disc < 0.0 {
-            return None;
+        TileRays {
+            o,
+            c: dot(o, o) - 1.0,
+            d00: self.local(d00),
+            dx: self.local(dx),
+            dy: self.local(dy),
         }
-        let sq = disc.sqrt();
-        let t0 = (-b - sq) / a;
-        if t0 > NEAR {
-            return Some(t0);
-        }
-        let t1 = (-b + sq) / a;
-        (t1 > NEAR).then_some(t1)
     }
 
     /// The unit outward normal at surface point `p`.
@@ -114,6 +106,11 @@ impl Prim {
     }
 }
 
+/// The scalp is drawn at this fraction of its radii: roots sit on the ellipsoid and the hair
+/// near them dips into it (the simulation keeps hair out of the collision spheres, not out of
+/// the scalp), so a full-size scalp would hide the roots and the hair lying on the head.
+pub const SCALP_DRAWN: f32 = 0.9;
+
 /// Fills `out` with the frame's primitives: the body spheres, then the scalp ellipsoid.
 pub(crate) fn prims(body: &BodyBuf, view: &View, w: f32, h: f32, out: &mut Vec<Prim>) {
     out.clear();
@@ -126,11 +123,45 @@ pub(crate) fn prims(body: &BodyBuf, view: &View, w: f32, h: f32, out: &mut Vec<P
     if body.scalp_radii.iter().all(|r| *r > 0.0) {
         out.push(Prim::new(
             body.scalp_center,
-            body.scalp_radii,
+            body.scalp_radii.map(|r| r * SCALP_DRAWN),
             body.scalp_rotation,
             view,
             w,
             h,
         ));
+    }
+}
+
+/// A tile's rays against one primitive, in its local frame (where it is the unit sphere).
+pub(crate) struct TileRays {
+    o: [f32; 3],
+    c: f32,
+    d00: [f32; 3],
+    dx: [f32; 3],
+    dy: [f32; 3],
+}
+
+impl TileRays {
+    /// The view depth of the nearest hit of ray (i, j) beyond the near plane, if any.
+    #[inline]
+    pub fn hit(&self, i: f32, j: f32) -> Option<f32> {
+        let d = [
+            self.d00[0] + i * self.dx[0] + j * self.dy[0],
+            self.d00[1] + i * self.dx[1] + j * self.dy[1],
+            self.d00[2] + i * self.dx[2] + j * self.dy[2],
+        ];
+        let b = dot(self.o, d);
+        let a = dot(d, d);
+        let disc = b * b - a * self.c;
+        if disc < 0.0 {
+            return None;
+        }
+        let sq = disc.sqrt();
+        let t0 = (-b - sq) / a;
+        if t0 > NEAR {
+            return Some(t0);
+        }
+        let t1 = (-b + sq) / a;
+        (t1 > NEAR).then_some(t1)
     }
 }

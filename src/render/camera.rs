@@ -168,6 +168,6 @@ pub fn bounds(points: &[[f32; 3]]) -> ([f32; 3], [f32; 3]) {
     (lo, hi)
 }
 
-/// The default viewing direction (eye → scene): a three-quarter view of the head from its
-/// right side and a little above, so that the face, the side and the back hair all show.
-pub const DEFAULT_VIEW: [f32; 3] = [-0.8, -0.15, -0.6];
+/// The default viewing direction (eye → scene): a three-quarter view of the face from its
+/// left and a little above, so that the face, the side and the hair over the shoulder show.
+pub const DEFAULT_VIEW: [f32; 3] = [-0.55, -0.2, -1.0];

@@ -99,6 +99,8 @@ const CHUNKS: usize = 16;
 
 struct Worker {
     buf: TileBuf,
+    sorted: Vec<raster::SegRec>,
+    tmp: Vec<raster::SegRec>,
     pixels: Vec<f32>,
     raster_ns: u64,
     resolve_ns: u64,
@@ -119,6 +121,8 @@ pub struct Renderer {
     tiles: Vec<Mutex<Vec<u8>>>,
     lut: Vec<u8>,
     times: StageTimes,
+    /// Per-strand linear colours; empty: every strand has `params.hair_color`.
+    strand_colors: Vec<[f32; 3]>,
 }
 
 impl Renderer {
@@ -153,6 +157,8 @@ impl Renderer {
             .map(|_| {
                 Mutex::new(Worker {
                     buf: TileBuf::default(),
+                    sorted: Vec::new(),
+                    tmp: Vec::new(),
                     pixels: Vec::new(),
                     raster_ns: 0,
                     resolve_ns: 0,
@@ -176,12 +182,24 @@ impl Renderer {
             tiles,
             lut: shading::srgb_lut(),
             times: StageTimes::default(),
+            strand_colors: Vec::new(),
         })
     }
 
     /// The parameters in force.
     pub fn params(&self) -> &RenderParams {
         &self.params
+    }
+
+    /// Gives strand `s` the sRGB colour `colors[s]` instead of the hair colour (strands beyond
+    /// the list keep the hair colour); an empty list restores the hair colour everywhere.
+    pub fn set_strand_colors(&mut self, colors: &[[f32; 3]]) {
+        self.strand_colors.clear();
+        self.strand_colors.extend(
+            colors
+                .iter()
+                .map(|c| srgb3_to_linear(c.map(|x| x.clamp(0.0, 1.0)))),
+        );
     }
 
     /// Stage times of the last frame.
@@ -202,7 +220,8 @@ impl Renderer {
         let (strand_width, strands) = (self.params.strand_width, input.strands);
 
         let t0 = Instant::now();
-        self.maps.build(&strands.points, &strands.offsets, light);
+        self.maps
+            .build_with(&strands.points, &strands.offsets, light, Some(&self.pool));
         let t1 = Instant::now();
         self.shade(strands, &view, light);
         let t2 = Instant::now();
@@ -276,7 +295,7 @@ impl Renderer {
                 Mutex::new((s0, s1, mine))
             });
         let next = AtomicUsize::new(0);
-        let maps = &self.maps;
+        let (maps, colors) = (&self.maps, &self.strand_colors);
         let job = |_k: usize| loop {
             let c = next.fetch_add(1, Ordering::Relaxed);
             if c >= CHUNKS {
@@ -290,6 +309,10 @@ impl Renderer {
                 strands.offsets[s0] as usize
             };
             for s in s0..s1 {
+                let mut shader = shader;
+                if let Some(c) = colors.get(s) {
+                    shader.color = *c;
+                }
                 let (a, b) = (strands.offsets[s] as usize, strands.offsets[s + 1] as usize);
                 let pts = &strands.points[a..b];
                 for (j, &pt) in pts.iter().enumerate() {
@@ -332,7 +355,7 @@ impl Renderer {
         let grid = self.grid;
         let n = grid.tile_samples();
         let next = AtomicUsize::new(0);
-        let (bins, verts, prims) = (&self.bins, &self.verts, &self.prims);
+        let (bins, prims) = (&self.bins, &self.prims);
         let (workers, tiles) = (&self.workers, &self.tiles);
         let job = |k: usize| {
             let mut w = workers[k].lock().unwrap_or_else(|e| e.into_inner());
@@ -346,10 +369,11 @@ impl Renderer {
                 let (ox, oy) = grid.origin(t);
                 w.buf.reset(n, ox, oy);
                 w.buf.cast_body(view, prims);
+                w.buf.close_blocks();
                 let items = &bins.items[bins.start[t] as usize..bins.start[t + 1] as usize];
-                for &i in items {
-                    let i = i as usize;
-                    w.buf.segment(&verts[i], &verts[i + 1], half, alpha);
+                raster::sort_tile(items, &mut w.sorted, &mut w.tmp);
+                for s in &w.sorted {
+                    w.buf.segment(&s.a, &s.b, half, alpha);
                     if w.buf.alive == 0 {
                         break;
                     }

@@ -35,7 +35,7 @@ pub struct RenderParams {
     /// Colour of the head and body, sRGB. Default a skin tone (0.85, 0.66, 0.56).
     pub body_color: [f32; 3],
     /// Resolution of each of the 16 opacity shadow maps, texels per side, 16 to 2048.
-    /// Default 256.
+    /// Default 128.
     pub shadow_map_size: u32,
     /// Camera position, metres; default: framing the hair's bounding box.
     pub eye: Option<[f32; 3]>,
@@ -61,7 +61,7 @@ impl Default for RenderParams {
             postfilter: 0.5,
             background: [0.93, 0.93, 0.95],
             body_color: [0.85, 0.66, 0.56],
-            shadow_map_size: 256,
+            shadow_map_size: 128,
             eye: None,
             target: None,
             fov_y: None,

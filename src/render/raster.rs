@@ -28,20 +28,43 @@ pub(crate) struct ScreenVertex {
     pub c: [f32; 3],
 }
 
-/// The frame's visible segments, sorted front to back and binned into tiles.
+/// A segment as binned: its two end points, copied so that a tile reads its segments from
+/// one contiguous run of memory.
+#[derive(Debug, Clone, Copy, Default)]
+pub(crate) struct SegRec {
+    pub a: ScreenVertex,
+    pub b: ScreenVertex,
+    /// Midpoint view depth, quantised to 16 bits over the frame's depth range.
+    pub key: u32,
+}
+
+/// The frame's visible segments binned into tiles, each with a 16-bit depth key; each tile
+/// sorts its own segments ([`sort_tile`]) so that no pass walks the whole frame in depth
+/// order (which would miss the cache at every segment).
 #[derive(Debug, Default)]
 pub(crate) struct Bins {
-    /// First vertex of each visible segment (the second is the next one).
-    segs: Vec<u32>,
-    keys: Vec<u32>,
-    /// Radix sort scratch.
-    tmp_keys: Vec<u32>,
-    tmp_segs: Vec<u32>,
-    counts: Vec<u32>,
+    /// First vertex and tile rectangle of each visible segment, in strand order.
+    firsts: Vec<u32>,
+    rects: Vec<[u16; 4]>,
+    cursor: Vec<u32>,
     /// Per tile, `start[t]..start[t + 1]` in `items`.
     pub start: Vec<u32>,
-    /// Segment first-vertex indices, per tile, front to back.
-    pub items: Vec<u32>,
+    pub items: Vec<SegRec>,
+}
+
+/// ⌊x⌋ for x ≥ 0 (negative x gives 0), without a libm call.
+#[inline]
+pub(crate) fn floor_pos(x: f32) -> usize {
+    // Through i32: one truncating instruction, where f32 → usize needs a sign fix-up.
+    x.clamp(0.0, 1e9) as i32 as usize
+}
+
+/// ⌈x⌉ for x ≥ 0 (negative x gives 0), without a libm call.
+#[inline]
+pub(crate) fn ceil_pos(x: f32) -> usize {
+    let x = x.clamp(0.0, 1e9);
+    let i = x as i32;
+    (if (i as f32) < x { i + 1 } else { i }) as usize
 }
 
 /// Tile grid of an image.
@@ -79,21 +102,24 @@ impl Grid {
     fn range(&self, a: f32, b: f32, n: usize) -> Option<(usize, usize)> {
         let span = (TILE * self.ss) as f32;
         let apron = (APRON * self.ss) as f32;
-        let lo = ((a - apron) / span).floor();
-        let hi = ((b + apron) / span).floor();
-        if hi < 0.0 || lo > (n - 1) as f32 {
+        let (lo, hi) = ((a - apron) / span, (b + apron) / span);
+        if hi < 0.0 || lo >= n as f32 || lo.is_nan() || hi.is_nan() {
             return None;
         }
-        Some((lo.max(0.0) as usize, (hi as usize).min(n - 1)))
+        Some((floor_pos(lo), floor_pos(hi).min(n - 1)))
     }
 }
 
 impl Bins {
-    /// Sorts the visible segments of `verts` (strand `s` spans `offsets[s]..offsets[s+1]`)
-    /// front to back and bins them into the tiles of `grid`. `reach` is how far (samples) a
-    /// line reaches beyond its centre line.
+    /// Bins the visible segments of `verts` (strand `s` spans `offsets[s]..offsets[s+1]`)
+    /// into the tiles of `grid`, in strand order. `reach` is how far (samples) a line reaches
+    /// beyond its centre line.
     pub fn build(&mut self, verts: &[ScreenVertex], offsets: &[u32], grid: &Grid, reach: f32) {
-        self.segs.clear();
+        self.firsts.clear();
+        self.rects.clear();
+        let nt = grid.tiles();
+        self.start.clear();
+        self.start.resize(nt + 1, 0);
         let (mut zlo, mut zhi) = (f32::INFINITY, f32::NEG_INFINITY);
         for s in 0..offsets.len().saturating_sub(1) {
             let (a, b) = (offsets[s] as usize, offsets[s + 1] as usize);
@@ -102,105 +128,78 @@ impl Bins {
                 if p.z <= super::camera::NEAR || q.z <= super::camera::NEAR {
                     continue;
                 }
-                let x0 = p.x.min(q.x) - reach;
-                let x1 = p.x.max(q.x) + reach;
-                let y0 = p.y.min(q.y) - reach;
-                let y1 = p.y.max(q.y) + reach;
-                if grid.range(x0, x1, grid.tiles_x).is_none()
-                    || grid.range(y0, y1, grid.tiles_y).is_none()
-                {
+                let xs = grid.range(p.x.min(q.x) - reach, p.x.max(q.x) + reach, grid.tiles_x);
+                let ys = grid.range(p.y.min(q.y) - reach, p.y.max(q.y) + reach, grid.tiles_y);
+                let (Some((x0, x1)), Some((y0, y1))) = (xs, ys) else {
                     continue;
+                };
+                for ty in y0..=y1 {
+                    for tx in x0..=x1 {
+                        self.start[ty * grid.tiles_x + tx + 1] += 1;
+                    }
                 }
                 let z = 0.5 * (p.z + q.z);
                 zlo = zlo.min(z);
                 zhi = zhi.max(z);
-                self.segs.push(i as u32);
-            }
-        }
-        // 24-bit depth keys, sorted by two stable 12-bit counting passes: equal keys keep
-        // strand order, so the order is the same on every run.
-        let scale = if zhi > zlo {
-            ((1u32 << 24) - 1) as f32 / (zhi - zlo)
-        } else {
-            0.0
-        };
-        self.keys.clear();
-        self.keys.extend(self.segs.iter().map(|&i| {
-            let v = &verts[i as usize];
-            let z = 0.5 * (v.z + verts[i as usize + 1].z);
-            (((z - zlo) * scale) as u32).min((1 << 24) - 1)
-        }));
-        self.radix_pass(0);
-        self.radix_pass(12);
-        self.bin(verts, grid, reach);
-    }
-
-    fn radix_pass(&mut self, shift: u32) {
-        let n = self.keys.len();
-        self.counts.clear();
-        self.counts.resize(4097, 0);
-        for &k in &self.keys {
-            self.counts[((k >> shift) & 0xfff) as usize + 1] += 1;
-        }
-        for d in 1..4097 {
-            self.counts[d] += self.counts[d - 1];
-        }
-        self.tmp_keys.resize(n, 0);
-        self.tmp_segs.resize(n, 0);
-        for j in 0..n {
-            let k = self.keys[j];
-            let d = ((k >> shift) & 0xfff) as usize;
-            let at = self.counts[d] as usize;
-            self.counts[d] += 1;
-            self.tmp_keys[at] = k;
-            self.tmp_segs[at] = self.segs[j];
-        }
-        std::mem::swap(&mut self.keys, &mut self.tmp_keys);
-        std::mem::swap(&mut self.segs, &mut self.tmp_segs);
-    }
-
-    fn tile_rect(v: &[ScreenVertex], i: usize, g: &Grid, reach: f32) -> [usize; 4] {
-        let (p, q) = (&v[i], &v[i + 1]);
-        let (x0, x1) = g
-            .range(p.x.min(q.x) - reach, p.x.max(q.x) + reach, g.tiles_x)
-            .unwrap_or((1, 0));
-        let (y0, y1) = g
-            .range(p.y.min(q.y) - reach, p.y.max(q.y) + reach, g.tiles_y)
-            .unwrap_or((1, 0));
-        [x0, x1, y0, y1]
-    }
-
-    fn bin(&mut self, verts: &[ScreenVertex], g: &Grid, reach: f32) {
-        let nt = g.tiles();
-        self.start.clear();
-        self.start.resize(nt + 1, 0);
-        for &i in &self.segs {
-            let [x0, x1, y0, y1] = Self::tile_rect(verts, i as usize, g, reach);
-            for ty in y0..=y1 {
-                for tx in x0..=x1 {
-                    self.start[ty * g.tiles_x + tx + 1] += 1;
-                }
+                self.firsts.push(i as u32);
+                self.rects
+                    .push([x0 as u16, x1 as u16, y0 as u16, y1 as u16]);
             }
         }
         for t in 1..=nt {
             self.start[t] += self.start[t - 1];
         }
-        self.items.resize(self.start[nt] as usize, 0);
-        // `counts` as the fill cursor of each tile.
-        self.counts.clear();
-        self.counts.extend_from_slice(&self.start[..nt]);
-        for &i in &self.segs {
-            let [x0, x1, y0, y1] = Self::tile_rect(verts, i as usize, g, reach);
-            for ty in y0..=y1 {
-                for tx in x0..=x1 {
-                    let c = &mut self.counts[ty * g.tiles_x + tx];
-                    self.items[*c as usize] = i;
+        let total = self.start[nt] as usize;
+        self.items.resize(total, SegRec::default());
+        self.cursor.clear();
+        self.cursor.extend_from_slice(&self.start[..nt]);
+        let scale = if zhi > zlo {
+            65535.0 / (zhi - zlo)
+        } else {
+            0.0
+        };
+        for (&i, &[x0, x1, y0, y1]) in self.firsts.iter().zip(&self.rects) {
+            let (a, b) = (verts[i as usize], verts[i as usize + 1]);
+            let z = 0.5 * (a.z + b.z);
+            let key = (((z - zlo) * scale) as u32).min(65535);
+            for ty in y0 as usize..=y1 as usize {
+                for tx in x0 as usize..=x1 as usize {
+                    let c = &mut self.cursor[ty * grid.tiles_x + tx];
+                    self.items[*c as usize] = SegRec { a, b, key };
                     *c += 1;
                 }
             }
         }
     }
 }
+
+/// Sorts a tile's segments front to back into `out` (by increasing key, equal keys in strand
+/// order: two stable 8-bit counting passes, so the order is the same on every run). The
+/// records themselves move, so that the rasteriser then reads them in order from memory.
+pub(crate) fn sort_tile(items: &[SegRec], out: &mut Vec<SegRec>, tmp: &mut Vec<SegRec>) {
+    let n = items.len();
+    out.resize(n, SegRec::default());
+    tmp.resize(n, SegRec::default());
+    let pass = |src: &[SegRec], dst: &mut [SegRec], shift: u32| {
+        let mut counts = [0u32; 257];
+        for r in src {
+            counts[((r.key >> shift) & 0xff) as usize + 1] += 1;
+        }
+        for d in 1..257 {
+            counts[d] += counts[d - 1];
+        }
+        for r in src {
+            let d = ((r.key >> shift) & 0xff) as usize;
+            dst[counts[d] as usize] = *r;
+            counts[d] += 1;
+        }
+    };
+    pass(items, tmp, 0);
+    pass(tmp, out, 8);
+}
+
+/// Side of a culling block, samples (a power of two).
+const BLOCK: usize = 8;
 
 /// One tile's samples, structure of arrays; reused from tile to tile.
 #[derive(Debug, Default)]
@@ -222,6 +221,12 @@ pub(crate) struct TileBuf {
     pub prim: Vec<u16>,
     /// Samples not yet opaque.
     pub alive: usize,
+    /// Blocks of BLOCK² samples per side.
+    nb: usize,
+    /// Per block, samples not yet opaque.
+    block_alive: Vec<u32>,
+    /// Per block, the farthest body depth (`INFINITY` if a sample has no body).
+    block_zmax: Vec<f32>,
 }
 
 impl TileBuf {
@@ -242,6 +247,49 @@ impl TileBuf {
         self.prim.clear();
         self.prim.resize(m, 0);
         self.alive = m;
+        self.nb = n.div_ceil(BLOCK);
+        self.block_alive.clear();
+        for by in 0..self.nb {
+            let h = (n - by * BLOCK).min(BLOCK);
+            for bx in 0..self.nb {
+                let w = (n - bx * BLOCK).min(BLOCK);
+                self.block_alive.push((w * h) as u32);
+            }
+        }
+        self.block_zmax.clear();
+        self.block_zmax.resize(self.nb * self.nb, f32::INFINITY);
+    }
+
+    /// Sets each block's farthest body depth, once the body is cast.
+    pub fn close_blocks(&mut self) {
+        let n = self.n;
+        self.block_zmax.fill(f32::NEG_INFINITY);
+        for j in 0..n {
+            for i in 0..n {
+                let b = (j / BLOCK) * self.nb + i / BLOCK;
+                self.block_zmax[b] = self.block_zmax[b].max(self.zb[j * n + i]);
+            }
+        }
+    }
+
+    /// Whether nothing at view depth `z` or beyond can show in tile-relative box
+    /// [x0, x1] × [y0, y1]: every block it touches is opaque, or hidden by the body.
+    #[inline]
+    fn hidden(&self, x0: f32, x1: f32, y0: f32, y1: f32, z: f32) -> bool {
+        let last = self.nb - 1;
+        let bx0 = (floor_pos(x0) / BLOCK).min(last);
+        let bx1 = (floor_pos(x1) / BLOCK).min(last);
+        let by0 = (floor_pos(y0) / BLOCK).min(last);
+        let by1 = (floor_pos(y1) / BLOCK).min(last);
+        for by in by0..=by1 {
+            for bx in bx0..=bx1 {
+                let b = by * self.nb + bx;
+                if self.block_alive[b] > 0 && z < self.block_zmax[b] {
+                    return false;
+                }
+            }
+        }
+        true
     }
 
     /// Ray casts the body primitives `prims` into the depth buffer.
@@ -249,20 +297,23 @@ impl TileBuf {
         let n = self.n;
         let (fx0, fy0) = (self.ox as f32, self.oy as f32);
         let (fx1, fy1) = (fx0 + n as f32, fy0 + n as f32);
+        // Rays are linear in the sample position: d(i, j) = d00 + i·dx + j·dy.
+        let d00 = view.ray(fx0 + 0.5, fy0 + 0.5);
+        let dx = super::camera::sub(view.ray(fx0 + 1.5, fy0 + 0.5), d00);
+        let dy = super::camera::sub(view.ray(fx0 + 0.5, fy0 + 1.5), d00);
         for (k, p) in prims.iter().enumerate() {
             let [rx0, ry0, rx1, ry1] = p.rect;
             if rx1 < fx0 || rx0 > fx1 || ry1 < fy0 || ry0 > fy1 {
                 continue;
             }
-            let j0 = (ry0 - fy0).floor().max(0.0) as usize;
-            let j1 = ((ry1 - fy0).ceil().max(0.0) as usize).min(n);
-            let i0 = (rx0 - fx0).floor().max(0.0) as usize;
-            let i1 = ((rx1 - fx0).ceil().max(0.0) as usize).min(n);
+            let j0 = floor_pos(ry0 - fy0).min(n);
+            let j1 = ceil_pos(ry1 - fy0).min(n);
+            let i0 = floor_pos(rx0 - fx0).min(n);
+            let i1 = ceil_pos(rx1 - fx0).min(n);
+            let r = p.rays(view.eye, d00, dx, dy);
             for j in j0..j1 {
-                let y = fy0 + j as f32 + 0.5;
                 for i in i0..i1 {
-                    let d = view.ray(fx0 + i as f32 + 0.5, y);
-                    if let Some(t) = p.hit(view.eye, d) {
+                    if let Some(t) = r.hit(i as f32, j as f32) {
                         let at = j * n + i;
                         if t < self.zb[at] {
                             self.zb[at] = t;
@@ -297,18 +348,31 @@ impl TileBuf {
         if d < 1e-6 {
             return;
         }
+        let r = half * 1.5 + 1.0;
+        let (zmin, lo0, hi0, lo1, hi1) = (
+            va.z.min(vb.z),
+            ax.min(bx) - r,
+            ax.max(bx) + r,
+            ay.min(by) - r,
+            ay.max(by) + r,
+        );
+        if hi0 < 0.0 || hi1 < 0.0 || self.hidden(lo0, hi0, lo1, hi1, zmin) {
+            return;
+        }
         let inv = 1.0 / d;
         let slope = (min1 - min0) * inv;
         // The line's cross-section along the minor axis widens as 1/cos of its angle.
         let h = half * (1.0 + slope * slope).sqrt();
         let (stride_maj, stride_min) = if x_major { (1, n) } else { (n, 1) };
-        let i0 = maj0.floor().max(0.0) as usize;
-        let i1 = (maj1.ceil().max(0.0) as usize).min(n);
+        let i0 = floor_pos(maj0);
+        let i1 = ceil_pos(maj1).min(n);
         let dz = vb.z - va.z;
         let dc = [vb.c[0] - va.c[0], vb.c[1] - va.c[1], vb.c[2] - va.c[2]];
+        let mut fi = i0 as i32 as f32;
         for i in i0..i1 {
-            let lo = maj0.max(i as f32);
-            let hi = maj1.min(i as f32 + 1.0);
+            let lo = maj0.max(fi);
+            let hi = maj1.min(fi + 1.0);
+            fi += 1.0;
             let cov_maj = hi - lo;
             if cov_maj <= 0.0 {
                 continue;
@@ -322,11 +386,13 @@ impl TileBuf {
                 va.c[2] + t * dc[2],
             ];
             let (y_lo, y_hi) = (c - h, c + h);
-            let j0 = y_lo.floor().max(0.0) as usize;
-            let j1 = (y_hi.ceil().max(0.0) as usize).min(n);
+            let j0 = floor_pos(y_lo);
+            let j1 = ceil_pos(y_hi).min(n);
             let a_maj = alpha * cov_maj;
+            let mut fj = j0 as i32 as f32;
             for j in j0..j1 {
-                let cov = y_hi.min(j as f32 + 1.0) - y_lo.max(j as f32);
+                let cov = y_hi.min(fj + 1.0) - y_lo.max(fj);
+                fj += 1.0;
                 let at = i * stride_maj + j * stride_min;
                 let tr = self.trans[at];
                 if tr < OPAQUE || z >= self.zb[at] {
@@ -340,6 +406,8 @@ impl TileBuf {
                 self.trans[at] = left;
                 if left < OPAQUE {
                     self.alive -= 1;
+                    let (x, y) = if x_major { (i, j) } else { (j, i) };
+                    self.block_alive[(y / BLOCK) * self.nb + x / BLOCK] -= 1;
                 }
             }
         }

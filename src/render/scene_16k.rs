@@ -47,7 +47,7 @@ pub fn zhang_16k_strands() -> StrandBuf {
         let r = (1.0 - y * y).max(0.0).sqrt();
         let phi = golden * i as f32;
         let n = [r * phi.cos(), y, r * phi.sin()];
-        let face = n[2] > 0.35 && n[1] < 0.55;
+        let face = n[2] > 0.2 && n[1] < 0.6;
         if face {
             continue;
         }
@@ -73,16 +73,18 @@ fn strand(id: u32, n: [f32; 3], out: &mut Vec<[f32; 3]>) {
     let mut p = on_scalp(n, 1.0);
     let len = 0.25 + 0.15 * hash01(id);
     let step = len / SEGMENTS_PER_STRAND as f32;
-    let mut dir = n;
+    let mut dir = super::camera::scale(n, 0.6);
     let phase = 6.283 * hash01(id ^ 0x5bd1_e995);
     out.push(p);
     for s in 1..=SEGMENTS_PER_STRAND {
         // Gravity pulls the direction down; a small wave across it.
         let wave = 0.25 * (phase + s as f32 * 0.9).sin();
+        // Hair from the front of the scalp is combed back, off the face.
+        let back = 0.45 * n[2].max(0.0);
         dir = super::camera::normalize([
             dir[0] + wave * 0.3 * -n[2],
-            dir[1] - 0.55,
-            dir[2] + wave * 0.3 * n[0],
+            dir[1] - 0.8,
+            dir[2] + wave * 0.3 * n[0] - back,
         ]);
         p = super::camera::add(p, super::camera::scale(dir, step));
         // Stay outside the scalp grown by 6% (hair lies on the head, not in it).

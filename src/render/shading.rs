@@ -89,8 +89,8 @@ pub(crate) struct HairShader {
 
 impl HairShader {
     /// The linear colour of a strand point with unit tangent `t`, unit direction to the eye
-    /// `e` and light transmittance `trans` (from the opacity shadow maps). The highlight is
-    /// white, the diffuse part hair-coloured; ambient light is not shadowed.
+    /// `e` and light transmittance `trans` (from the opacity shadow maps). Ambient light is not
+    /// shadowed.
     #[inline]
     pub fn shade(&self, t: [f32; 3], e: [f32; 3], trans: f32) -> [f32; 3] {
         let tl = super::camera::dot(t, self.light);
@@ -98,10 +98,8 @@ impl HairShader {
         let d = self.diffuse * kajiya_kay_diffuse(tl);
         let s = self.specular * kajiya_kay_specular(tl, te, self.exponent);
         let k = self.ambient;
-        [
-            self.color[0] * (k + trans * d) + trans * s,
-            self.color[1] * (k + trans * d) + trans * s,
-            self.color[2] * (k + trans * d) + trans * s,
-        ]
+        // The highlight takes half the hair's hue (a pure white one looks grey on dark hair).
+        let h = |c: f32| c * (k + trans * d) + trans * s * (0.5 + 0.5 * c);
+        [h(self.color[0]), h(self.color[1]), h(self.color[2])]
     }
 }

@@ -33,7 +33,7 @@ pub fn eq1_opacity(omega: &[f32], z: f32, z_first: f32, dz: f32) -> f32 {
 }
 
 /// The 16 maps of one frame and the light frame they were built in.
-#[derive(Debug, Clone)]
+#[derive(Debug)]
 pub struct ShadowMaps {
     size: usize,
     /// Light frame: `ax_d` is the direction the light travels (depth grows along it).
@@ -49,7 +49,12 @@ pub struct ShadowMaps {
     omega: Vec<f32>,
     /// Light-space points of the frame (u, v in texels; z in metres).
     lp: Vec<[f32; 3]>,
+    /// What each half of the strands deposited, before the front-to-back sum.
+    partial: [std::sync::Mutex<Vec<f32>>; HALVES],
 }
+
+/// The strands are deposited in two halves, one per thread at most.
+const HALVES: usize = 2;
 
 impl ShadowMaps {
     /// Empty maps of `size`² texels each.
@@ -66,6 +71,7 @@ impl ShadowMaps {
             dz: 1.0,
             omega: vec![0.0; size * size * MAPS],
             lp: Vec::new(),
+            partial: Default::default(),
         }
     }
 
@@ -74,8 +80,67 @@ impl ShadowMaps {
         self.dz
     }
 
-    /// Builds the maps for strands `points`/`offsets` lit from direction `to_light`.
+    /// Builds the maps for strands `points`/`offsets` lit from direction `to_light`, on the
+    /// calling thread.
     pub fn build(&mut self, points: &[[f32; 3]], offsets: &[u32], to_light: [f32; 3]) {
+        self.build_with(points, offsets, to_light, None);
+    }
+
+    /// [`ShadowMaps::build`], the two halves of the strands deposited by the pool's threads.
+    /// Each half has its own maps, summed half 0 + half 1 afterwards, so the result does not
+    /// depend on the number of threads.
+    pub(crate) fn build_with(
+        &mut self,
+        points: &[[f32; 3]],
+        offsets: &[u32],
+        to_light: [f32; 3],
+        pool: Option<&super::pool::Pool>,
+    ) {
+        self.frame(points, to_light);
+        let ns = offsets.len().saturating_sub(1);
+        let next = std::sync::atomic::AtomicUsize::new(0);
+        let me = &*self;
+        let job = |_k: usize| loop {
+            let h = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+            if h >= HALVES {
+                break;
+            }
+            let mut m = me.partial[h].lock().unwrap_or_else(|e| e.into_inner());
+            m.clear();
+            m.resize(me.size * me.size * MAPS, 0.0);
+            for s in h * ns / HALVES..(h + 1) * ns / HALVES {
+                let (a, b) = (offsets[s] as usize, offsets[s + 1] as usize);
+                for i in a..b.saturating_sub(1) {
+                    me.deposit(&mut m, me.lp[i], me.lp[i + 1]);
+                }
+            }
+        };
+        match pool {
+            Some(p) => p.run(&job),
+            None => job(0),
+        }
+        let [p0, p1] = &mut self.partial;
+        let (p0, p1) = (
+            p0.get_mut().unwrap_or_else(|e| e.into_inner()),
+            p1.get_mut().unwrap_or_else(|e| e.into_inner()),
+        );
+        // Ω_i = everything deposited into maps 0..=i.
+        for ((texel, a), b) in self
+            .omega
+            .chunks_exact_mut(MAPS)
+            .zip(p0.chunks_exact(MAPS))
+            .zip(p1.chunks_exact(MAPS))
+        {
+            let mut acc = 0.0;
+            for m in 0..MAPS {
+                acc += a[m] + b[m];
+                texel[m] = acc;
+            }
+        }
+    }
+
+    /// Sets up the light frame around the hair and the light-space points.
+    fn frame(&mut self, points: &[[f32; 3]], to_light: [f32; 3]) {
         let d = normalize([-to_light[0], -to_light[1], -to_light[2]]);
         let helper = if d[1].abs() < 0.9 {
             [0.0, 1.0, 0.0]
@@ -86,12 +151,8 @@ impl ShadowMaps {
         let v = cross(d, u);
         (self.ax_u, self.ax_v, self.ax_d) = (u, v, d);
         self.omega.fill(0.0);
-        if points.is_empty() {
-            self.lp.clear();
-            return;
-        }
-        let (mut lo, mut hi) = ([f32::INFINITY; 3], [f32::NEG_INFINITY; 3]);
         self.lp.clear();
+        let (mut lo, mut hi) = ([f32::INFINITY; 3], [f32::NEG_INFINITY; 3]);
         for p in points {
             let q = [dot(*p, u), dot(*p, v), dot(*p, d)];
             for a in 0..3 {
@@ -99,6 +160,9 @@ impl ShadowMaps {
                 hi[a] = hi[a].max(q[a]);
             }
             self.lp.push(q);
+        }
+        if points.is_empty() {
+            (lo, hi) = ([0.0; 3], [1.0; 3]);
         }
         let n = self.size as f32;
         let extent = (hi[0] - lo[0]).max(hi[1] - lo[1]).max(1e-4);
@@ -113,45 +177,35 @@ impl ShadowMaps {
             q[0] = (q[0] - u0) * it;
             q[1] = (q[1] - v0) * it;
         }
-        for s in 0..offsets.len().saturating_sub(1) {
-            let (a, b) = (offsets[s] as usize, offsets[s + 1] as usize);
-            for i in a..b.saturating_sub(1) {
-                self.deposit(self.lp[i], self.lp[i + 1]);
-            }
-        }
-        // Ω_i = everything deposited into maps 0..=i.
-        for texel in self.omega.chunks_exact_mut(MAPS) {
-            let mut acc = 0.0;
-            for o in texel {
-                acc += *o;
-                *o = acc;
-            }
-        }
     }
 
-    /// Deposits segment a–b (light space) into the first map behind each of its pieces.
-    fn deposit(&mut self, a: [f32; 3], b: [f32; 3]) {
+    /// Deposits segment a–b (light space) into `m`, each piece (at most a texel long) into the
+    /// first map behind it.
+    fn deposit(&self, m: &mut [f32], a: [f32; 3], b: [f32; 3]) {
         let (du, dv) = (b[0] - a[0], b[1] - a[1]);
         let len = (du * du + dv * dv).sqrt();
-        let pieces = (len.ceil() as usize).max(1);
+        let pieces = super::raster::ceil_pos(len).max(1);
         let w = len / pieces as f32;
+        let step = 1.0 / pieces as f32;
         let inv_dz = 1.0 / self.dz;
         let s = self.size;
         let max = (s - 2) as f32;
-        for k in 0..pieces {
-            let t = (k as f32 + 0.5) / pieces as f32;
+        let top = (MAPS - 1) as f32;
+        let mut t = 0.5 * step;
+        for _ in 0..pieces {
             // Texel centres are at integer + 0.5.
             let x = (a[0] + du * t - 0.5).clamp(0.0, max);
             let y = (a[1] + dv * t - 0.5).clamp(0.0, max);
             let z = a[2] + (b[2] - a[2]) * t;
-            let m = (((z - self.z0) * inv_dz).ceil().max(0.0) as usize).min(MAPS - 1);
-            let (xi, yi) = (x as usize, y as usize);
-            let (fx, fy) = (x - xi as f32, y - yi as f32);
-            let base = (yi * s + xi) * MAPS + m;
-            self.omega[base] += w * (1.0 - fx) * (1.0 - fy);
-            self.omega[base + MAPS] += w * fx * (1.0 - fy);
-            self.omega[base + s * MAPS] += w * (1.0 - fx) * fy;
-            self.omega[base + (s + 1) * MAPS] += w * fx * fy;
+            t += step;
+            let map = super::raster::ceil_pos(((z - self.z0) * inv_dz).min(top));
+            let (xi, yi) = (x as i32 as usize, y as i32 as usize);
+            let (fx, fy) = (x - xi as i32 as f32, y - yi as i32 as f32);
+            let base = (yi * s + xi) * MAPS + map;
+            m[base] += w * (1.0 - fx) * (1.0 - fy);
+            m[base + MAPS] += w * fx * (1.0 - fy);
+            m[base + s * MAPS] += w * (1.0 - fx) * fy;
+            m[base + (s + 1) * MAPS] += w * fx * fy;
         }
     }
 
@@ -181,16 +235,16 @@ impl ShadowMaps {
         } else if f >= (MAPS - 1) as f32 {
             (MAPS - 2, 0.0, 1.0)
         } else {
-            let i = f as usize;
-            let w = f - i as f32;
+            let i = f as i32 as usize;
+            let w = f - i as i32 as f32;
             (i, 1.0 - w, w)
         };
         let s = self.size;
         let max = (s - 2) as f32;
         let x = (q[0] - 0.5).clamp(0.0, max);
         let y = (q[1] - 0.5).clamp(0.0, max);
-        let (xi, yi) = (x as usize, y as usize);
-        let (fx, fy) = (x - xi as f32, y - yi as f32);
+        let (xi, yi) = (x as i32 as usize, y as i32 as usize);
+        let (fx, fy) = (x - xi as i32 as f32, y - yi as i32 as f32);
         let base = (yi * s + xi) * MAPS + i;
         let o = &self.omega;
         let at = |b: usize| w0 * o[b] + w1 * o[b + 1];
