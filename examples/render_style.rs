@@ -1,8 +1,8 @@
 //! Renders a built-in style at rest to a PNG, or benchmarks the renderer on the 16,215-strand
 //! head of Zhang and Wünsche 2007, §7.2.
 //!
-//! `cargo run --release --example render_style -- [STYLE] [OUT.png] [WIDTH HEIGHT]`
-//! (default `long docs/render.png 640 480`);
+//! `cargo run --release --example render_style -- [STYLE] [OUT.png] [WIDTH HEIGHT [X,Y,Z]]`
+//! (default `long docs/render.png 640 480`, viewed along `camera::DEFAULT_VIEW`);
 //! `cargo run --release --example render_style -- --bench16k [FRAMES] [OUT.png]` prints frames
 //! per second at 1 and 2 threads and writes the last image.
 
@@ -53,6 +53,18 @@ fn main() -> anyhow::Result<()> {
     let out = args.get(1).map(String::as_str).unwrap_or("docs/render.png");
     let w: u32 = args.get(2).map(|s| s.parse()).transpose()?.unwrap_or(640);
     let h: u32 = args.get(3).map(|s| s.parse()).transpose()?.unwrap_or(480);
+    // Optional viewing direction (eye → scene) as `x,y,z`.
+    let view = match args.get(4) {
+        Some(v) => {
+            let c: Vec<f32> = v
+                .split(",")
+                .map(|x| x.trim().parse())
+                .collect::<Result<_, _>>()?;
+            anyhow::ensure!(c.len() == 3, "a view direction is x,y,z");
+            [c[0], c[1], c[2]]
+        }
+        None => DEFAULT_VIEW,
+    };
     let scene = Scene::load(style, "still", SolverKind::Awt)?;
     let mut solver = scene.solver();
     let mut fb = FrameBuilder::new(&scene.model, usize::MAX, 2);
@@ -60,7 +72,7 @@ fn main() -> anyhow::Result<()> {
     fb.fill(solver.as_mut(), &mut frame);
     let params = RenderParams::default();
     let (lo, hi) = bounds(&frame.strands.points);
-    let cam = Camera::from_params(&params, lo, hi, DEFAULT_VIEW);
+    let cam = Camera::from_params(&params, lo, hi, view);
     let mut r = Renderer::new(params, w, h, 2).map_err(anyhow::Error::msg)?;
     let mut img = Image::default();
     let input = RenderInput {

@@ -228,8 +228,7 @@ impl Renderer {
 
         let half = 0.5 * strand_width * ss as f32;
         let reach = half * 1.5 + 1.0;
-        self.bins
-            .build(&self.verts, &strands.offsets, &self.grid, reach);
+        self.bin(&strands.offsets, reach);
         let (ws, hs) = (
             (self.width as usize * ss) as f32,
             (self.height as usize * ss) as f32,
@@ -336,6 +335,38 @@ impl Renderer {
         self.pool.run(&job);
     }
 
+    /// Bins the segments into tiles: the two halves of the strands counted, then filled, by
+    /// the pool's threads.
+    fn bin(&mut self, offsets: &[u32], reach: f32) {
+        let ns = offsets.len().saturating_sub(1);
+        let (verts, grid, halves) = (&self.verts, &self.grid, &self.bins.halves);
+        let next = AtomicUsize::new(0);
+        let count = |_k: usize| loop {
+            let h = next.fetch_add(1, Ordering::Relaxed);
+            if h >= 2 {
+                break;
+            }
+            let mut b = halves[h].lock().unwrap_or_else(|e| e.into_inner());
+            b.count(verts, offsets, h * ns / 2..(h + 1) * ns / 2, grid, reach);
+        };
+        self.pool.run(&count);
+        let (mut zlo, mut zhi) = (f32::INFINITY, f32::NEG_INFINITY);
+        for h in halves {
+            let (a, b) = h.lock().unwrap_or_else(|e| e.into_inner()).depth_range();
+            (zlo, zhi) = (zlo.min(a), zhi.max(b));
+        }
+        let next = AtomicUsize::new(0);
+        let fill = |_k: usize| loop {
+            let h = next.fetch_add(1, Ordering::Relaxed);
+            if h >= 2 {
+                break;
+            }
+            let mut b = halves[h].lock().unwrap_or_else(|e| e.into_inner());
+            b.fill(verts, grid, zlo, zhi);
+        };
+        self.pool.run(&fill);
+    }
+
     fn tile_pass(&mut self, view: &View, light: [f32; 3], half: f32) {
         let p = &self.params;
         let resolve = resolve::Resolve {
@@ -355,7 +386,12 @@ impl Renderer {
         let grid = self.grid;
         let n = grid.tile_samples();
         let next = AtomicUsize::new(0);
-        let (bins, prims) = (&self.bins, &self.prims);
+        let prims = &self.prims;
+        let [h0, h1] = &mut self.bins.halves;
+        let halves = [
+            &*h0.get_mut().unwrap_or_else(|e| e.into_inner()),
+            &*h1.get_mut().unwrap_or_else(|e| e.into_inner()),
+        ];
         let (workers, tiles) = (&self.workers, &self.tiles);
         let job = |k: usize| {
             let mut w = workers[k].lock().unwrap_or_else(|e| e.into_inner());
@@ -370,8 +406,12 @@ impl Renderer {
                 w.buf.reset(n, ox, oy);
                 w.buf.cast_body(view, prims);
                 w.buf.close_blocks();
-                let items = &bins.items[bins.start[t] as usize..bins.start[t + 1] as usize];
-                raster::sort_tile(items, &mut w.sorted, &mut w.tmp);
+                raster::sort_tile(
+                    halves[0].tile(t),
+                    halves[1].tile(t),
+                    &mut w.sorted,
+                    &mut w.tmp,
+                );
                 for s in &w.sorted {
                     w.buf.segment(&s.a, &s.b, half, alpha);
                     if w.buf.alive == 0 {

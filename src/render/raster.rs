@@ -40,13 +40,24 @@ pub(crate) struct SegRec {
 
 /// The frame's visible segments binned into tiles, each with a 16-bit depth key; each tile
 /// sorts its own segments ([`sort_tile`]) so that no pass walks the whole frame in depth
-/// order (which would miss the cache at every segment).
+/// order (which would miss the cache at every segment). The strands are binned in two halves
+/// (one per thread at most), each into its own lists: a tile's segments are half 0's list then
+/// half 1's, in strand order whatever the number of threads.
 #[derive(Debug, Default)]
 pub(crate) struct Bins {
+    pub halves: [std::sync::Mutex<HalfBins>; 2],
+}
+
+/// The bins of one half of the strands.
+#[derive(Debug, Default)]
+pub(crate) struct HalfBins {
     /// First vertex and tile rectangle of each visible segment, in strand order.
     firsts: Vec<u32>,
     rects: Vec<[u16; 4]>,
     cursor: Vec<u32>,
+    /// Midpoint depth range of the visible segments.
+    zlo: f32,
+    zhi: f32,
     /// Per tile, `start[t]..start[t + 1]` in `items`.
     pub start: Vec<u32>,
     pub items: Vec<SegRec>,
@@ -55,16 +66,15 @@ pub(crate) struct Bins {
 /// ⌊x⌋ for x ≥ 0 (negative x gives 0), without a libm call.
 #[inline]
 pub(crate) fn floor_pos(x: f32) -> usize {
-    // Through i32: one truncating instruction, where f32 → usize needs a sign fix-up.
-    x.clamp(0.0, 1e9) as i32 as usize
+    // Truncation is the floor for x ≥ 0 and 0 for −1 < x < 0; the cast saturates (NaN → 0).
+    (x as i32).max(0) as usize
 }
 
 /// ⌈x⌉ for x ≥ 0 (negative x gives 0), without a libm call.
 #[inline]
 pub(crate) fn ceil_pos(x: f32) -> usize {
-    let x = x.clamp(0.0, 1e9);
     let i = x as i32;
-    (if (i as f32) < x { i + 1 } else { i }) as usize
+    (i + ((i as f32) < x) as i32).max(0) as usize
 }
 
 /// Tile grid of an image.
@@ -110,18 +120,25 @@ impl Grid {
     }
 }
 
-impl Bins {
-    /// Bins the visible segments of `verts` (strand `s` spans `offsets[s]..offsets[s+1]`)
-    /// into the tiles of `grid`, in strand order. `reach` is how far (samples) a line reaches
-    /// beyond its centre line.
-    pub fn build(&mut self, verts: &[ScreenVertex], offsets: &[u32], grid: &Grid, reach: f32) {
+impl HalfBins {
+    /// Finds the visible segments of strands `strands` of `verts` (strand `s` spans
+    /// `offsets[s]..offsets[s+1]`), their tiles in `grid` and depth range, and counts them per
+    /// tile. `reach` is how far (samples) a line reaches beyond its centre line.
+    pub fn count(
+        &mut self,
+        verts: &[ScreenVertex],
+        offsets: &[u32],
+        strands: std::ops::Range<usize>,
+        grid: &Grid,
+        reach: f32,
+    ) {
         self.firsts.clear();
         self.rects.clear();
         let nt = grid.tiles();
         self.start.clear();
         self.start.resize(nt + 1, 0);
         let (mut zlo, mut zhi) = (f32::INFINITY, f32::NEG_INFINITY);
-        for s in 0..offsets.len().saturating_sub(1) {
+        for s in strands {
             let (a, b) = (offsets[s] as usize, offsets[s + 1] as usize);
             for i in a..b.saturating_sub(1) {
                 let (p, q) = (&verts[i], &verts[i + 1]);
@@ -149,6 +166,12 @@ impl Bins {
         for t in 1..=nt {
             self.start[t] += self.start[t - 1];
         }
+        (self.zlo, self.zhi) = (zlo, zhi);
+    }
+
+    /// Fills the tile lists, with depth keys quantised over [zlo, zhi].
+    pub fn fill(&mut self, verts: &[ScreenVertex], grid: &Grid, zlo: f32, zhi: f32) {
+        let nt = grid.tiles();
         let total = self.start[nt] as usize;
         self.items.resize(total, SegRec::default());
         self.cursor.clear();
@@ -171,31 +194,46 @@ impl Bins {
             }
         }
     }
+
+    /// Depth range of the last count.
+    pub fn depth_range(&self) -> (f32, f32) {
+        (self.zlo, self.zhi)
+    }
+
+    /// Tile `t`'s segments.
+    pub fn tile(&self, t: usize) -> &[SegRec] {
+        &self.items[self.start[t] as usize..self.start[t + 1] as usize]
+    }
 }
 
 /// Sorts a tile's segments front to back into `out` (by increasing key, equal keys in strand
 /// order: two stable 8-bit counting passes, so the order is the same on every run). The
 /// records themselves move, so that the rasteriser then reads them in order from memory.
-pub(crate) fn sort_tile(items: &[SegRec], out: &mut Vec<SegRec>, tmp: &mut Vec<SegRec>) {
-    let n = items.len();
+pub(crate) fn sort_tile(
+    first: &[SegRec],
+    second: &[SegRec],
+    out: &mut Vec<SegRec>,
+    tmp: &mut Vec<SegRec>,
+) {
+    let n = first.len() + second.len();
     out.resize(n, SegRec::default());
     tmp.resize(n, SegRec::default());
-    let pass = |src: &[SegRec], dst: &mut [SegRec], shift: u32| {
+    let pass = |a: &[SegRec], b: &[SegRec], dst: &mut [SegRec], shift: u32| {
         let mut counts = [0u32; 257];
-        for r in src {
+        for r in a.iter().chain(b) {
             counts[((r.key >> shift) & 0xff) as usize + 1] += 1;
         }
         for d in 1..257 {
             counts[d] += counts[d - 1];
         }
-        for r in src {
+        for r in a.iter().chain(b) {
             let d = ((r.key >> shift) & 0xff) as usize;
             dst[counts[d] as usize] = *r;
             counts[d] += 1;
         }
     };
-    pass(items, tmp, 0);
-    pass(tmp, out, 8);
+    pass(first, second, tmp, 0);
+    pass(tmp, &[], out, 8);
 }
 
 /// Side of a culling block, samples (a power of two).

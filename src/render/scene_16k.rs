@@ -47,7 +47,7 @@ pub fn zhang_16k_strands() -> StrandBuf {
         let r = (1.0 - y * y).max(0.0).sqrt();
         let phi = golden * i as f32;
         let n = [r * phi.cos(), y, r * phi.sin()];
-        let face = n[2] > 0.2 && n[1] < 0.6;
+        let face = n[2] > 0.15 && n[1] < 0.8;
         if face {
             continue;
         }
@@ -80,7 +80,7 @@ fn strand(id: u32, n: [f32; 3], out: &mut Vec<[f32; 3]>) {
         // Gravity pulls the direction down; a small wave across it.
         let wave = 0.25 * (phase + s as f32 * 0.9).sin();
         // Hair from the front of the scalp is combed back, off the face.
-        let back = 0.45 * n[2].max(0.0);
+        let back = (n[2] + 0.3).max(0.0);
         dir = super::camera::normalize([
             dir[0] + wave * 0.3 * -n[2],
             dir[1] - 0.8,
