@@ -1,6 +1,8 @@
 //! The hair renderer (issue 10): Kajiya-Kay terms, opacity shadow maps, antialiasing, depth
 //! order, determinism, the body, and refusing bad parameters.
 
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::cell::Cell;
 use std::path::Path;
 
 use wisptree::frame::{BodyBuf, StrandBuf};
@@ -9,6 +11,41 @@ use wisptree::render::{
     zhang_16k_body, zhang_16k_strands, Camera, Image, RenderInput, RenderParams, Renderer,
     ShadowMaps, MAPS,
 };
+
+/// Counts the allocations of threads that set `COUNTING` (see `rendering_allocates_nothing_once_warm`).
+struct Counting;
+
+thread_local! {
+    static COUNTING: Cell<bool> = const { Cell::new(false) };
+    static ALLOCS: Cell<u64> = const { Cell::new(0) };
+}
+
+fn note() {
+    if COUNTING.try_with(|c| c.get()) == Ok(true) {
+        let _ = ALLOCS.try_with(|a| a.set(a.get() + 1));
+    }
+}
+
+unsafe impl GlobalAlloc for Counting {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        note();
+        unsafe { System.alloc(layout) }
+    }
+    unsafe fn alloc_zeroed(&self, layout: Layout) -> *mut u8 {
+        note();
+        unsafe { System.alloc_zeroed(layout) }
+    }
+    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
+        note();
+        unsafe { System.realloc(ptr, layout, new_size) }
+    }
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        unsafe { System.dealloc(ptr, layout) }
+    }
+}
+
+#[global_allocator]
+static GLOBAL: Counting = Counting;
 
 const W: u32 = 160;
 const H: u32 = 120;
@@ -483,4 +520,29 @@ fn png_and_jpeg_encode() {
     assert_eq!(&bytes[1..4], b"PNG");
     let j = wisptree::render::encode_jpeg(&img, 80);
     assert_eq!(&j[..2], &[0xff, 0xd8]);
+}
+
+#[test]
+fn rendering_allocates_nothing_once_warm() {
+    // One thread: all the work is on this (counted) thread.
+    let s = zhang_16k_strands();
+    let body = zhang_16k_body();
+    let (lo, hi) = bounds(&s.points);
+    let cam = Camera::framing(lo, hi, wisptree::render::camera::DEFAULT_VIEW);
+    let input = RenderInput {
+        strands: &s,
+        body: &body,
+    };
+    let mut r = Renderer::new(RenderParams::default(), 160, 120, 1).unwrap();
+    let mut img = Image::default();
+    for _ in 0..2 {
+        r.render(&input, &cam, &mut img);
+    }
+    ALLOCS.with(|a| a.set(0));
+    COUNTING.with(|c| c.set(true));
+    for _ in 0..3 {
+        r.render(&input, &cam, &mut img);
+    }
+    COUNTING.with(|c| c.set(false));
+    assert_eq!(ALLOCS.with(|a| a.get()), 0, "allocations while rendering warm frames");
 }
