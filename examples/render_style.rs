@@ -70,7 +70,8 @@ fn main() -> anyhow::Result<()> {
     let mut fb = FrameBuilder::new(&scene.model, usize::MAX, 2);
     let mut frame = Frame::default();
     fb.fill(solver.as_mut(), &mut frame);
-    let params = RenderParams::default();
+    // The style's `render:` section (defaults where it has none).
+    let params = scene.loaded.style.render.clone();
     let (lo, hi) = bounds(&frame.strands.points);
     let cam = Camera::from_params(&params, lo, hi, view);
     let mut r = Renderer::new(params, w, h, 2).map_err(anyhow::Error::msg)?;

@@ -544,5 +544,9 @@ fn rendering_allocates_nothing_once_warm() {
         r.render(&input, &cam, &mut img);
     }
     COUNTING.with(|c| c.set(false));
-    assert_eq!(ALLOCS.with(|a| a.get()), 0, "allocations while rendering warm frames");
+    assert_eq!(
+        ALLOCS.with(|a| a.get()),
+        0,
+        "allocations while rendering warm frames"
+    );
 }

@@ -24,7 +24,7 @@ pub struct RenderParams {
     pub kappa: f32,
     /// Opacity of a strand where it fully covers a sample. Default 0.55.
     pub strand_alpha: f32,
-    /// Strand width on screen, output pixels. Default 0.7.
+    /// Strand width on screen, output pixels. Default 0.9.
     pub strand_width: f32,
     /// Samples per pixel along each axis (2 → 4 samples per pixel), 2 to 4. Default 2.
     pub supersampling: u32,
@@ -56,7 +56,7 @@ impl Default for RenderParams {
             ambient: 0.18,
             kappa: 0.07,
             strand_alpha: 0.55,
-            strand_width: 0.7,
+            strand_width: 0.9,
             supersampling: 2,
             postfilter: 0.5,
             background: [0.93, 0.93, 0.95],

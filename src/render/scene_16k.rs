@@ -47,7 +47,7 @@ pub fn zhang_16k_strands() -> StrandBuf {
         let r = (1.0 - y * y).max(0.0).sqrt();
         let phi = golden * i as f32;
         let n = [r * phi.cos(), y, r * phi.sin()];
-        let face = n[2] > 0.15 && n[1] < 0.8;
+        let face = n[2] > 0.3 && n[1] < 0.55;
         if face {
             continue;
         }
