@@ -59,6 +59,9 @@ impl Resolve<'_> {
         for py in 0..np {
             for px in 0..np {
                 let mut acc = [0.0f32; 3];
+                // The body is shaded once per pixel and primitive (its first visible sample):
+                // its edges keep every sample's coverage, its shading varies slowly.
+                let mut shaded: Option<(u16, [f32; 3])> = None;
                 for sy in 0..ss {
                     let j = py * ss + sy;
                     for sx in 0..ss {
@@ -68,12 +71,20 @@ impl Resolve<'_> {
                         let mut c = [buf.r[at], buf.g[at], buf.b[at]];
                         if tr >= OPAQUE {
                             let base = if buf.zb[at].is_finite() {
-                                self.body_at(
-                                    (buf.ox + i as i32) as f32 + 0.5,
-                                    (buf.oy + j as i32) as f32 + 0.5,
-                                    buf.zb[at],
-                                    buf.prim[at] as usize,
-                                )
+                                let k = buf.prim[at];
+                                match shaded {
+                                    Some((pk, c)) if pk == k => c,
+                                    _ => {
+                                        let c = self.body_at(
+                                            (buf.ox + i as i32) as f32 + 0.5,
+                                            (buf.oy + j as i32) as f32 + 0.5,
+                                            buf.zb[at],
+                                            k as usize,
+                                        );
+                                        shaded = Some((k, c));
+                                        c
+                                    }
+                                }
                             } else {
                                 self.background
                             };

@@ -179,12 +179,14 @@ impl ShadowMaps {
         }
     }
 
-    /// Deposits segment a–b (light space) into `m`, each piece (at most a texel long) into the
-    /// first map behind it.
+    /// Deposits segment a–b (light space) into `m`, each piece (at most two texels long) into
+    /// the first map behind it.
     fn deposit(&self, m: &mut [f32], a: [f32; 3], b: [f32; 3]) {
         let (du, dv) = (b[0] - a[0], b[1] - a[1]);
         let len = (du * du + dv * dv).sqrt();
-        let pieces = super::raster::ceil_pos(len).max(1);
+        // Pieces up to two texels long: the bilinear splat spreads each over a 2×2 footprint,
+        // so the deposit stays continuous at half the cost of one piece per texel.
+        let pieces = super::raster::ceil_pos(0.5 * len).max(1);
         let w = len / pieces as f32;
         let step = 1.0 / pieces as f32;
         let inv_dz = 1.0 / self.dz;
