@@ -132,9 +132,9 @@ impl ShadowMaps {
             .zip(p1.chunks_exact(MAPS))
         {
             let mut acc = 0.0;
-            for m in 0..MAPS {
-                acc += a[m] + b[m];
-                texel[m] = acc;
+            for ((o, x), y) in texel.iter_mut().zip(a).zip(b) {
+                acc += x + y;
+                *o = acc;
             }
         }
     }
