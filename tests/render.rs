@@ -550,3 +550,25 @@ fn rendering_allocates_nothing_once_warm() {
         "allocations while rendering warm frames"
     );
 }
+
+#[test]
+fn no_strands_draws_the_body_on_the_background() {
+    let body = zhang_16k_body();
+    let cam = Camera::framing([-0.2, 1.1, -0.2], [0.2, 1.75, 0.2], [0.0, 0.0, -1.0]);
+    let params = RenderParams::default();
+    let bg = params.background.map(|c| (c * 255.0).round() as u8);
+    for s in [StrandBuf::default(), strands(&[])] {
+        let img = render(params.clone(), &s, &body, &cam);
+        assert_eq!(img.rgb.len(), (W * H * 3) as usize);
+        let corner = img.pixel(0, 0);
+        assert!(
+            corner.iter().zip(bg).all(|(a, b)| a.abs_diff(b) <= 1),
+            "{corner:?}"
+        );
+        let centre = img.pixel(W / 2, H / 2);
+        assert!(
+            centre.iter().zip(bg).any(|(a, b)| a.abs_diff(b) > 20),
+            "body at the centre: {centre:?}"
+        );
+    }
+}
