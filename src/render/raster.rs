@@ -271,6 +271,8 @@ pub(crate) struct TileBuf {
     block_alive: Vec<u32>,
     /// Per block, the farthest body depth (`INFINITY` if a sample has no body).
     block_zmax: Vec<f32>,
+    /// Whether the body covers any sample of the tile.
+    body_seen: bool,
 }
 
 impl TileBuf {
@@ -302,11 +304,16 @@ impl TileBuf {
         }
         self.block_zmax.clear();
         self.block_zmax.resize(self.nb * self.nb, f32::INFINITY);
+        self.body_seen = false;
     }
 
     /// Sets each block's farthest body depth, once the body is cast.
     pub fn close_blocks(&mut self) {
         let n = self.n;
+        if !self.body_seen {
+            // `reset` left every block open (no body anywhere in the tile).
+            return;
+        }
         self.block_zmax.fill(f32::NEG_INFINITY);
         for j in 0..n {
             for i in 0..n {
@@ -362,6 +369,7 @@ impl TileBuf {
                         if t < self.zb[at] {
                             self.zb[at] = t;
                             self.prim[at] = k as u16;
+                            self.body_seen = true;
                         }
                     }
                 }
