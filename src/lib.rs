@@ -33,6 +33,7 @@ pub mod model;
 pub mod motion;
 pub mod pipeline;
 pub mod report;
+pub mod render;
 pub mod scene;
 pub mod solver;
 pub mod stream;

@@ -406,6 +406,8 @@ pub fn validate(style: &Style) -> Result<(), Invalid> {
     non_negative(s.wind.frequency, "sim.wind.frequency")?;
     positive(s.wind.wavelength, "sim.wind.wavelength")?;
 
+    style.render.validate()?;
+
     match &style.hair {
         Hair::Generated(g) => {
             positive(g.density, "hair.density")?;

@@ -39,6 +39,10 @@ pub struct Style {
     /// [`LayeredParams::default`].
     #[serde(default)]
     pub layered: crate::solver::layered::LayeredParams,
+    /// How the hair is rendered (shading, shadows, antialiasing). Default:
+    /// [`crate::render::RenderParams::default`].
+    #[serde(default)]
+    pub render: crate::render::RenderParams,
 }
 
 fn default_seed() -> u64 {

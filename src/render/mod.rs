@@ -1,0 +1,483 @@
+//! The hair renderer: strands and body to an RGB image, on the CPU (the right half of the AWT
+//! paper's Figure 4; Zhang and Wünsche 2007, §4–6).
+//!
+//! A frame goes through four stages:
+//!
+//! 1. **Shadow maps** ([`shadow`]): 16 opacity maps perpendicular to the light.
+//! 2. **Shading**: every strand point is shaded with Kajiya-Kay ([`shading`]) under the light
+//!    transmittance of the maps, and projected (Zhang and Wünsche shade per vertex and let the
+//!    rasteriser interpolate colours, §6.1).
+//! 3. **Rasterising** ([`raster`]): segments sorted by depth once, binned into 32×32-pixel
+//!    tiles; each tile ray casts the body ([`body`]) then blends its segments front to back on
+//!    a supersampled grid.
+//! 4. **Resolve** ([`resolve`]): body or background behind the hair, box filter per pixel,
+//!    3×3 postfilter, sRGB.
+//!
+//! Tiles are independent and each is done by one thread, in a fixed order of segments, so the
+//! image is the same bit for bit whatever the number of threads. Every buffer belongs to the
+//! [`Renderer`] and is reused: once warm, rendering a frame allocates nothing. No physics and no
+//! Rerun here.
+
+pub mod body;
+pub mod camera;
+pub mod params;
+mod pool;
+pub mod raster;
+pub mod resolve;
+pub mod scene_16k;
+pub mod shading;
+pub mod shadow;
+
+use std::path::Path;
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::Mutex;
+use std::time::{Duration, Instant};
+
+pub use camera::{bounds, Camera};
+pub use params::RenderParams;
+pub use scene_16k::{bench_render, zhang_16k_body, zhang_16k_strands, RenderBench};
+pub use shading::{kajiya_kay_diffuse, kajiya_kay_specular};
+pub use shadow::{eq1_opacity, ShadowMaps, MAPS};
+
+use crate::frame::{BodyBuf, StrandBuf};
+use camera::{normalize, sub, View};
+use raster::{Bins, Grid, ScreenVertex, TileBuf, TILE};
+use shading::{srgb3_to_linear, HairShader};
+
+/// Largest image side accepted, pixels.
+pub const MAX_SIDE: u32 = 8192;
+
+/// What to draw.
+pub struct RenderInput<'a> {
+    /// All strands, already smoothed polylines.
+    pub strands: &'a StrandBuf,
+    /// Spheres and scalp ellipsoid as posed.
+    pub body: &'a BodyBuf,
+}
+
+/// An 8-bit sRGB image, row-major, 3 bytes per pixel.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Image {
+    /// Pixels per row.
+    pub width: u32,
+    /// Rows.
+    pub height: u32,
+    /// `width × height × 3` bytes.
+    pub rgb: Vec<u8>,
+}
+
+impl Image {
+    /// The (r, g, b) of pixel (x, y).
+    pub fn pixel(&self, x: u32, y: u32) -> [u8; 3] {
+        let o = ((y * self.width + x) * 3) as usize;
+        [self.rgb[o], self.rgb[o + 1], self.rgb[o + 2]]
+    }
+}
+
+/// Wall-clock time of each stage of the last frame.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct StageTimes {
+    /// Building the 16 opacity shadow maps.
+    pub shadow_maps: Duration,
+    /// Shading and projecting every strand point.
+    pub shading: Duration,
+    /// Sorting and binning segments, then the tile pass's body casting and blending.
+    pub rasterising: Duration,
+    /// The tile pass's resolve (body shading, filters, sRGB) and the copy to the image.
+    pub resolve: Duration,
+}
+
+impl StageTimes {
+    /// All stages.
+    pub fn total(&self) -> Duration {
+        self.shadow_maps + self.shading + self.rasterising + self.resolve
+    }
+}
+
+/// Strand chunks of the shading stage (work items for the threads).
+const CHUNKS: usize = 16;
+
+struct Worker {
+    buf: TileBuf,
+    sorted: Vec<raster::SegRec>,
+    tmp: Vec<raster::SegRec>,
+    pixels: Vec<f32>,
+    raster_ns: u64,
+    resolve_ns: u64,
+}
+
+/// The renderer: owns every buffer, a pool of threads, and the parameters.
+pub struct Renderer {
+    params: RenderParams,
+    width: u32,
+    height: u32,
+    grid: Grid,
+    pool: pool::Pool,
+    maps: ShadowMaps,
+    verts: Vec<ScreenVertex>,
+    bins: Bins,
+    prims: Vec<body::Prim>,
+    workers: Vec<Mutex<Worker>>,
+    tiles: Vec<Mutex<Vec<u8>>>,
+    lut: Vec<u8>,
+    times: StageTimes,
+    /// Per-strand linear colours; empty: every strand has `params.hair_color`.
+    strand_colors: Vec<[f32; 3]>,
+}
+
+impl Renderer {
+    /// A renderer of `width × height` images using `threads` threads (the caller's included).
+    /// Refuses bad parameters, sizes of 0 or above [`MAX_SIDE`], and 0 or more than 64 threads.
+    pub fn new(
+        params: RenderParams,
+        width: u32,
+        height: u32,
+        threads: usize,
+    ) -> Result<Renderer, String> {
+        params
+            .validate()
+            .map_err(|(f, m)| format!("field `{f}`: {m}"))?;
+        for (v, what) in [(width, "width"), (height, "height")] {
+            if v == 0 || v > MAX_SIDE {
+                return Err(format!(
+                    "image {what} must be 1 to {MAX_SIDE} pixels, got {v}"
+                ));
+            }
+        }
+        if threads == 0 || threads > 64 {
+            return Err(format!("threads must be 1 to 64, got {threads}"));
+        }
+        let grid = Grid::new(
+            width as usize,
+            height as usize,
+            params.supersampling as usize,
+        );
+        let pool = pool::Pool::new(threads)?;
+        let workers = (0..pool.workers())
+            .map(|_| {
+                Mutex::new(Worker {
+                    buf: TileBuf::default(),
+                    sorted: Vec::new(),
+                    tmp: Vec::new(),
+                    pixels: Vec::new(),
+                    raster_ns: 0,
+                    resolve_ns: 0,
+                })
+            })
+            .collect();
+        let tiles = (0..grid.tiles())
+            .map(|_| Mutex::new(vec![0u8; TILE * TILE * 3]))
+            .collect();
+        Ok(Renderer {
+            maps: ShadowMaps::new(params.shadow_map_size as usize),
+            params,
+            width,
+            height,
+            grid,
+            pool,
+            verts: Vec::new(),
+            bins: Bins::default(),
+            prims: Vec::new(),
+            workers,
+            tiles,
+            lut: shading::srgb_lut(),
+            times: StageTimes::default(),
+            strand_colors: Vec::new(),
+        })
+    }
+
+    /// The parameters in force.
+    pub fn params(&self) -> &RenderParams {
+        &self.params
+    }
+
+    /// Gives strand `s` the sRGB colour `colors[s]` instead of the hair colour (strands beyond
+    /// the list keep the hair colour); an empty list restores the hair colour everywhere.
+    pub fn set_strand_colors(&mut self, colors: &[[f32; 3]]) {
+        self.strand_colors.clear();
+        self.strand_colors.extend(
+            colors
+                .iter()
+                .map(|c| srgb3_to_linear(c.map(|x| x.clamp(0.0, 1.0)))),
+        );
+    }
+
+    /// Stage times of the last frame.
+    pub fn stage_times(&self) -> StageTimes {
+        self.times
+    }
+
+    /// The opacity shadow maps of the last frame.
+    pub fn shadow_maps(&self) -> &ShadowMaps {
+        &self.maps
+    }
+
+    /// Renders `input` seen by `camera` into `out` (resized to the renderer's size).
+    pub fn render(&mut self, input: &RenderInput, camera: &Camera, out: &mut Image) {
+        let ss = self.grid.ss;
+        let view = View::new(camera, self.width * ss as u32, self.height * ss as u32);
+        let light = normalize(self.params.light_dir);
+        let (strand_width, strands) = (self.params.strand_width, input.strands);
+
+        let t0 = Instant::now();
+        self.maps
+            .build_with(&strands.points, &strands.offsets, light, Some(&self.pool));
+        let t1 = Instant::now();
+        self.shade(strands, &view, light);
+        let t2 = Instant::now();
+
+        let half = 0.5 * strand_width * ss as f32;
+        let reach = half * 1.5 + 1.0;
+        self.bin(&strands.offsets, reach);
+        let (ws, hs) = (
+            (self.width as usize * ss) as f32,
+            (self.height as usize * ss) as f32,
+        );
+        body::prims(input.body, &view, ws, hs, &mut self.prims);
+        let t3 = Instant::now();
+        self.tile_pass(&view, light, half);
+        let t4 = Instant::now();
+        self.copy_out(out);
+        let t5 = Instant::now();
+
+        let (mut rn, mut sn) = (0u64, 0u64);
+        for w in &mut self.workers {
+            let w = w.get_mut().unwrap_or_else(|e| e.into_inner());
+            rn += std::mem::take(&mut w.raster_ns);
+            sn += std::mem::take(&mut w.resolve_ns);
+        }
+        let pass = (t4 - t3).as_secs_f64();
+        let frac = if rn + sn > 0 {
+            rn as f64 / (rn + sn) as f64
+        } else {
+            0.5
+        };
+        self.times = StageTimes {
+            shadow_maps: t1 - t0,
+            shading: t2 - t1,
+            rasterising: (t3 - t2) + Duration::from_secs_f64(pass * frac),
+            resolve: Duration::from_secs_f64(pass * (1.0 - frac)) + (t5 - t4),
+        };
+    }
+
+    /// Shades and projects every strand point (Kajiya-Kay under the maps' transmittance).
+    fn shade(&mut self, strands: &StrandBuf, view: &View, light: [f32; 3]) {
+        let p = &self.params;
+        let shader = HairShader {
+            color: srgb3_to_linear(p.hair_color),
+            diffuse: p.diffuse,
+            specular: p.specular,
+            exponent: p.specular_exponent,
+            ambient: p.ambient,
+            light,
+        };
+        let kappa = p.kappa;
+        self.verts.clear();
+        self.verts
+            .resize(strands.points.len(), ScreenVertex::default());
+        let ns = strands.len();
+        // Split the vertices at strand boundaries into CHUNKS slices, one lock each.
+        let mut rest: &mut [ScreenVertex] = &mut self.verts;
+        let mut taken = 0usize;
+        let parts: [Mutex<(usize, usize, &mut [ScreenVertex])>; CHUNKS] =
+            std::array::from_fn(|c| {
+                let s0 = c * ns / CHUNKS;
+                let s1 = (c + 1) * ns / CHUNKS;
+                let end = if ns == 0 {
+                    0
+                } else {
+                    strands.offsets[s1] as usize
+                };
+                let (mine, tail) = std::mem::take(&mut rest).split_at_mut(end - taken);
+                rest = tail;
+                taken = end;
+                Mutex::new((s0, s1, mine))
+            });
+        let next = AtomicUsize::new(0);
+        let (maps, colors) = (&self.maps, &self.strand_colors);
+        let job = |_k: usize| loop {
+            let c = next.fetch_add(1, Ordering::Relaxed);
+            if c >= CHUNKS {
+                break;
+            }
+            let mut g = parts[c].lock().unwrap_or_else(|e| e.into_inner());
+            let (s0, s1, ref mut out) = *g;
+            let base = if ns == 0 {
+                0
+            } else {
+                strands.offsets[s0] as usize
+            };
+            for s in s0..s1 {
+                let mut shader = shader;
+                if let Some(c) = colors.get(s) {
+                    shader.color = *c;
+                }
+                let (a, b) = (strands.offsets[s] as usize, strands.offsets[s + 1] as usize);
+                let pts = &strands.points[a..b];
+                for (j, &pt) in pts.iter().enumerate() {
+                    let prev = pts[j.saturating_sub(1)];
+                    let next = pts[(j + 1).min(pts.len() - 1)];
+                    let t = normalize(sub(next, prev));
+                    let e = normalize(sub(view.eye, pt));
+                    let q = maps.point(a + j);
+                    let trans = (-kappa * maps.opacity(q, 1.0)).exp();
+                    let c = shader.shade(t, e, trans);
+                    let sp = view.project(pt);
+                    out[a + j - base] = ScreenVertex {
+                        x: sp[0],
+                        y: sp[1],
+                        z: sp[2],
+                        c,
+                    };
+                }
+            }
+        };
+        self.pool.run(&job);
+    }
+
+    /// Bins the segments into tiles: the two halves of the strands counted, then filled, by
+    /// the pool's threads.
+    fn bin(&mut self, offsets: &[u32], reach: f32) {
+        let ns = offsets.len().saturating_sub(1);
+        let (verts, grid, halves) = (&self.verts, &self.grid, &self.bins.halves);
+        let next = AtomicUsize::new(0);
+        let count = |_k: usize| loop {
+            let h = next.fetch_add(1, Ordering::Relaxed);
+            if h >= 2 {
+                break;
+            }
+            let mut b = halves[h].lock().unwrap_or_else(|e| e.into_inner());
+            b.count(verts, offsets, h * ns / 2..(h + 1) * ns / 2, grid, reach);
+        };
+        self.pool.run(&count);
+        let (mut zlo, mut zhi) = (f32::INFINITY, f32::NEG_INFINITY);
+        for h in halves {
+            let (a, b) = h.lock().unwrap_or_else(|e| e.into_inner()).depth_range();
+            (zlo, zhi) = (zlo.min(a), zhi.max(b));
+        }
+        let next = AtomicUsize::new(0);
+        let fill = |_k: usize| loop {
+            let h = next.fetch_add(1, Ordering::Relaxed);
+            if h >= 2 {
+                break;
+            }
+            let mut b = halves[h].lock().unwrap_or_else(|e| e.into_inner());
+            b.fill(verts, grid, zlo, zhi);
+        };
+        self.pool.run(&fill);
+    }
+
+    fn tile_pass(&mut self, view: &View, light: [f32; 3], half: f32) {
+        let p = &self.params;
+        let resolve = resolve::Resolve {
+            view,
+            prims: &self.prims,
+            maps: &self.maps,
+            map_size: p.shadow_map_size as f32,
+            background: srgb3_to_linear(p.background),
+            body: srgb3_to_linear(p.body_color),
+            ambient: p.ambient,
+            kappa: p.kappa,
+            light,
+            postfilter: p.postfilter,
+            lut: &self.lut,
+        };
+        let alpha = p.strand_alpha;
+        let grid = self.grid;
+        let n = grid.tile_samples();
+        let next = AtomicUsize::new(0);
+        let prims = &self.prims;
+        let [h0, h1] = &mut self.bins.halves;
+        let halves = [
+            &*h0.get_mut().unwrap_or_else(|e| e.into_inner()),
+            &*h1.get_mut().unwrap_or_else(|e| e.into_inner()),
+        ];
+        let (workers, tiles) = (&self.workers, &self.tiles);
+        let job = |k: usize| {
+            let mut w = workers[k].lock().unwrap_or_else(|e| e.into_inner());
+            let w = &mut *w;
+            loop {
+                let t = next.fetch_add(1, Ordering::Relaxed);
+                if t >= grid.tiles() {
+                    break;
+                }
+                let r0 = Instant::now();
+                let (ox, oy) = grid.origin(t);
+                w.buf.reset(n, ox, oy);
+                w.buf.cast_body(view, prims);
+                w.buf.close_blocks();
+                raster::sort_tile(
+                    halves[0].tile(t),
+                    halves[1].tile(t),
+                    &mut w.sorted,
+                    &mut w.tmp,
+                );
+                for s in &w.sorted {
+                    w.buf.segment(&s.a, &s.b, half, alpha);
+                    if w.buf.alive == 0 {
+                        break;
+                    }
+                }
+                let r1 = Instant::now();
+                let mut out = tiles[t].lock().unwrap_or_else(|e| e.into_inner());
+                resolve.tile(&w.buf, grid.ss, &mut w.pixels, &mut out);
+                w.raster_ns += (r1 - r0).as_nanos() as u64;
+                w.resolve_ns += r1.elapsed().as_nanos() as u64;
+            }
+        };
+        self.pool.run(&job);
+    }
+
+    fn copy_out(&mut self, out: &mut Image) {
+        let (w, h) = (self.width as usize, self.height as usize);
+        out.width = self.width;
+        out.height = self.height;
+        out.rgb.resize(w * h * 3, 0);
+        for (t, tile) in self.tiles.iter_mut().enumerate() {
+            let tile = tile.get_mut().unwrap_or_else(|e| e.into_inner());
+            let (tx, ty) = (
+                (t % self.grid.tiles_x) * TILE,
+                (t / self.grid.tiles_x) * TILE,
+            );
+            let cols = TILE.min(w - tx);
+            for y in 0..TILE.min(h - ty) {
+                let src = &tile[y * TILE * 3..(y * TILE + cols) * 3];
+                let o = ((ty + y) * w + tx) * 3;
+                out.rgb[o..o + cols * 3].copy_from_slice(src);
+            }
+        }
+    }
+}
+
+/// Writes `img` as an 8-bit RGB PNG.
+pub fn write_png(img: &Image, path: &Path) -> std::io::Result<()> {
+    image::save_buffer_with_format(
+        path,
+        &img.rgb,
+        img.width,
+        img.height,
+        image::ExtendedColorType::Rgb8,
+        image::ImageFormat::Png,
+    )
+    .map_err(std::io::Error::other)
+}
+
+/// Encodes `img` as a baseline JPEG of `quality` (1–100, clamped).
+pub fn encode_jpeg(img: &Image, quality: u8) -> Vec<u8> {
+    let mut out = Vec::new();
+    let enc = image::codecs::jpeg::JpegEncoder::new_with_quality(&mut out, quality.clamp(1, 100));
+    // Encoding into memory fails only on a size the image type cannot hold, which an `Image`
+    // from the renderer (≤ 8192 per side) never has.
+    if image::ImageEncoder::write_image(
+        enc,
+        &img.rgb,
+        img.width,
+        img.height,
+        image::ExtendedColorType::Rgb8,
+    )
+    .is_err()
+    {
+        out.clear();
+    }
+    out
+}

@@ -1,0 +1,140 @@
+//! A fixed set of worker threads that run one job at a time, started once per renderer so
+//! that rendering a frame spawns nothing and allocates nothing.
+
+use std::panic::{catch_unwind, AssertUnwindSafe};
+use std::sync::{Arc, Condvar, Mutex, MutexGuard};
+use std::thread::JoinHandle;
+
+/// The job being run, its lifetime erased (see [`Pool::run`] for why that is sound).
+#[derive(Clone, Copy)]
+struct JobPtr(*const (dyn Fn(usize) + Sync + 'static));
+
+// SAFETY: the pointee is `Sync`, and `Pool::run` keeps it alive until every worker is done.
+unsafe impl Send for JobPtr {}
+
+struct State {
+    generation: u64,
+    job: Option<JobPtr>,
+    running: usize,
+    panicked: bool,
+    quit: bool,
+}
+
+struct Shared {
+    state: Mutex<State>,
+    start: Condvar,
+    done: Condvar,
+}
+
+fn lock(m: &Mutex<State>) -> MutexGuard<'_, State> {
+    m.lock().unwrap_or_else(|e| e.into_inner())
+}
+
+/// `n` workers: the calling thread (worker 0) and `n − 1` helper threads.
+pub(crate) struct Pool {
+    shared: Arc<Shared>,
+    threads: Vec<JoinHandle<()>>,
+}
+
+impl Pool {
+    /// Starts `n − 1` helper threads (none for `n` ≤ 1).
+    pub fn new(n: usize) -> Result<Pool, String> {
+        let shared = Arc::new(Shared {
+            state: Mutex::new(State {
+                generation: 0,
+                job: None,
+                running: 0,
+                panicked: false,
+                quit: false,
+            }),
+            start: Condvar::new(),
+            done: Condvar::new(),
+        });
+        let mut threads = Vec::new();
+        for k in 1..n.max(1) {
+            let s = shared.clone();
+            let t = std::thread::Builder::new()
+                .name(format!("wisptree-render-{k}"))
+                .spawn(move || serve(&s, k))
+                .map_err(|e| format!("cannot start render thread {k}: {e}"))?;
+            threads.push(t);
+        }
+        Ok(Pool { shared, threads })
+    }
+
+    /// Number of workers, the caller included.
+    pub fn workers(&self) -> usize {
+        self.threads.len() + 1
+    }
+
+    /// Runs `f(k)` once on every worker k (the caller is worker 0) and returns when all are
+    /// done. A panic in any of them is re-raised here.
+    pub fn run(&self, f: &(dyn Fn(usize) + Sync)) {
+        if self.threads.is_empty() {
+            f(0);
+            return;
+        }
+        let ptr: *const (dyn Fn(usize) + Sync + '_) = f;
+        // SAFETY: only the lifetime changes. Workers call the job only between being handed it
+        // here and decrementing `running`; this function does not return (nor unwind) before
+        // `running` is back to 0, so `f` outlives every call.
+        let ptr: *const (dyn Fn(usize) + Sync + 'static) = unsafe { std::mem::transmute(ptr) };
+        {
+            let mut st = lock(&self.shared.state);
+            st.job = Some(JobPtr(ptr));
+            st.running = self.threads.len();
+            st.generation += 1;
+            self.shared.start.notify_all();
+        }
+        let mine = catch_unwind(AssertUnwindSafe(|| f(0)));
+        let theirs = {
+            let mut st = lock(&self.shared.state);
+            while st.running > 0 {
+                st = self.shared.done.wait(st).unwrap_or_else(|e| e.into_inner());
+            }
+            st.job = None;
+            std::mem::take(&mut st.panicked)
+        };
+        if let Err(e) = mine {
+            std::panic::resume_unwind(e);
+        }
+        assert!(!theirs, "a render worker thread panicked");
+    }
+}
+
+fn serve(s: &Shared, k: usize) {
+    let mut seen = 0;
+    loop {
+        let job = {
+            let mut st = lock(&s.state);
+            while st.generation == seen && !st.quit {
+                st = s.start.wait(st).unwrap_or_else(|e| e.into_inner());
+            }
+            if st.quit {
+                return;
+            }
+            seen = st.generation;
+            st.job.expect("a job comes with each generation")
+        };
+        // SAFETY: `Pool::run` keeps the job alive until `running` drops to 0 below.
+        let r = catch_unwind(AssertUnwindSafe(|| unsafe { (*job.0)(k) }));
+        let mut st = lock(&s.state);
+        if r.is_err() {
+            st.panicked = true;
+        }
+        st.running -= 1;
+        if st.running == 0 {
+            s.done.notify_all();
+        }
+    }
+}
+
+impl Drop for Pool {
+    fn drop(&mut self) {
+        lock(&self.shared.state).quit = true;
+        self.shared.start.notify_all();
+        for t in self.threads.drain(..) {
+            let _ = t.join();
+        }
+    }
+}

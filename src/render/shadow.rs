@@ -1,0 +1,268 @@
+//! Opacity shadow maps (Kim and Neumann 2001, "Opacity Shadow Maps"; as used by Zhang and
+//! Wünsche 2007, §4 and §6.1).
+//!
+//! [`MAPS`] = 16 maps perpendicular to the light direction, equally spaced over the hair's
+//! extent along it: map i lies at depth z_i = z_0 + i·dz from the front of the hair (as seen
+//! from the light) to its back. Map i holds Ω_i, the opacity of all hair in front of z_i, in
+//! units of strand crossings: every strand segment deposits its projected length (in texels)
+//! into the first map behind it, bilinearly over the 4 nearest texels, then the maps are summed
+//! front to back. The opacity at depth z is interpolated between the two nearest maps with
+//! Zhang and Wünsche's eq. 1, Ω = Σ_i Ω_i·max(0, 1 − |z − z_i|/dz) (see [`eq1_opacity`]), and
+//! the light transmittance is exp(−κ·Ω).
+//!
+//! **Bias.** A segment lies in front of the map behind it, so a lookup at its own depth would
+//! see part of its own deposit. Hair is looked up one map spacing nearer the light (at z − dz):
+//! a strand then never shadows itself, and hair less than dz in front of a point shadows it
+//! only in part (fully from 2·dz on). The body, which deposits nothing, is looked up unbiased.
+
+use super::camera::{cross, dot, normalize};
+
+/// Number of opacity maps (Zhang and Wünsche 2007, §6.1: sixteen, four per render target).
+pub const MAPS: usize = 16;
+
+/// Zhang and Wünsche 2007, eq. 1: the opacity at depth `z` from the maps' opacities `omega`
+/// (map i at depth `z_first + i·dz`), written as in the paper with no search for the two
+/// nearest maps. The renderer uses the equivalent two-map interpolation (and holds the last
+/// map's value behind it, where eq. 1 would fade to zero).
+pub fn eq1_opacity(omega: &[f32], z: f32, z_first: f32, dz: f32) -> f32 {
+    omega
+        .iter()
+        .enumerate()
+        .map(|(i, o)| o * (1.0 - ((z - (z_first + i as f32 * dz)) / dz).abs()).max(0.0))
+        .sum()
+}
+
+/// The 16 maps of one frame and the light frame they were built in.
+#[derive(Debug)]
+pub struct ShadowMaps {
+    size: usize,
+    /// Light frame: `ax_d` is the direction the light travels (depth grows along it).
+    ax_u: [f32; 3],
+    ax_v: [f32; 3],
+    ax_d: [f32; 3],
+    u0: f32,
+    v0: f32,
+    inv_texel: f32,
+    z0: f32,
+    dz: f32,
+    /// Per texel (row-major), the [`MAPS`] values, front to back: one cache line per texel.
+    omega: Vec<f32>,
+    /// Light-space points of the frame (u, v in texels; z in metres).
+    lp: Vec<[f32; 3]>,
+    /// What each half of the strands deposited, before the front-to-back sum.
+    partial: [std::sync::Mutex<Vec<f32>>; HALVES],
+}
+
+/// The strands are deposited in two halves, one per thread at most.
+const HALVES: usize = 2;
+
+impl ShadowMaps {
+    /// Empty maps of `size`² texels each.
+    pub fn new(size: usize) -> ShadowMaps {
+        ShadowMaps {
+            size,
+            ax_u: [1.0, 0.0, 0.0],
+            ax_v: [0.0, 0.0, 1.0],
+            ax_d: [0.0, -1.0, 0.0],
+            u0: 0.0,
+            v0: 0.0,
+            inv_texel: 1.0,
+            z0: 0.0,
+            dz: 1.0,
+            omega: vec![0.0; size * size * MAPS],
+            lp: Vec::new(),
+            partial: Default::default(),
+        }
+    }
+
+    /// Distance between two maps, metres.
+    pub fn spacing(&self) -> f32 {
+        self.dz
+    }
+
+    /// Builds the maps for strands `points`/`offsets` lit from direction `to_light`, on the
+    /// calling thread.
+    pub fn build(&mut self, points: &[[f32; 3]], offsets: &[u32], to_light: [f32; 3]) {
+        self.build_with(points, offsets, to_light, None);
+    }
+
+    /// [`ShadowMaps::build`], the two halves of the strands deposited by the pool's threads.
+    /// Each half has its own maps, summed half 0 + half 1 afterwards, so the result does not
+    /// depend on the number of threads.
+    pub(crate) fn build_with(
+        &mut self,
+        points: &[[f32; 3]],
+        offsets: &[u32],
+        to_light: [f32; 3],
+        pool: Option<&super::pool::Pool>,
+    ) {
+        self.frame(points, to_light);
+        let ns = offsets.len().saturating_sub(1);
+        let next = std::sync::atomic::AtomicUsize::new(0);
+        let me = &*self;
+        let job = |_k: usize| loop {
+            let h = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+            if h >= HALVES {
+                break;
+            }
+            let mut m = me.partial[h].lock().unwrap_or_else(|e| e.into_inner());
+            m.clear();
+            m.resize(me.size * me.size * MAPS, 0.0);
+            for s in h * ns / HALVES..(h + 1) * ns / HALVES {
+                let (a, b) = (offsets[s] as usize, offsets[s + 1] as usize);
+                for i in a..b.saturating_sub(1) {
+                    me.deposit(&mut m, me.lp[i], me.lp[i + 1]);
+                }
+            }
+        };
+        match pool {
+            Some(p) => p.run(&job),
+            None => job(0),
+        }
+        let [p0, p1] = &mut self.partial;
+        let (p0, p1) = (
+            p0.get_mut().unwrap_or_else(|e| e.into_inner()),
+            p1.get_mut().unwrap_or_else(|e| e.into_inner()),
+        );
+        // Ω_i = everything deposited into maps 0..=i.
+        for ((texel, a), b) in self
+            .omega
+            .chunks_exact_mut(MAPS)
+            .zip(p0.chunks_exact(MAPS))
+            .zip(p1.chunks_exact(MAPS))
+        {
+            let mut acc = 0.0;
+            for ((o, x), y) in texel.iter_mut().zip(a).zip(b) {
+                acc += x + y;
+                *o = acc;
+            }
+        }
+    }
+
+    /// Sets up the light frame around the hair and the light-space points.
+    fn frame(&mut self, points: &[[f32; 3]], to_light: [f32; 3]) {
+        let d = normalize([-to_light[0], -to_light[1], -to_light[2]]);
+        let helper = if d[1].abs() < 0.9 {
+            [0.0, 1.0, 0.0]
+        } else {
+            [1.0, 0.0, 0.0]
+        };
+        let u = normalize(cross(helper, d));
+        let v = cross(d, u);
+        (self.ax_u, self.ax_v, self.ax_d) = (u, v, d);
+        self.omega.fill(0.0);
+        self.lp.clear();
+        let (mut lo, mut hi) = ([f32::INFINITY; 3], [f32::NEG_INFINITY; 3]);
+        for p in points {
+            let q = [dot(*p, u), dot(*p, v), dot(*p, d)];
+            for a in 0..3 {
+                lo[a] = lo[a].min(q[a]);
+                hi[a] = hi[a].max(q[a]);
+            }
+            self.lp.push(q);
+        }
+        if points.is_empty() {
+            (lo, hi) = ([0.0; 3], [1.0; 3]);
+        }
+        let n = self.size as f32;
+        let extent = (hi[0] - lo[0]).max(hi[1] - lo[1]).max(1e-4);
+        // One texel of margin on each side, so that bilinear splats stay inside.
+        self.inv_texel = (n - 3.0) / extent;
+        self.u0 = lo[0] - 1.0 / self.inv_texel;
+        self.v0 = lo[1] - 1.0 / self.inv_texel;
+        self.z0 = lo[2];
+        self.dz = ((hi[2] - lo[2]) / (MAPS - 1) as f32).max(1e-5);
+        let (u0, v0, it) = (self.u0, self.v0, self.inv_texel);
+        for q in &mut self.lp {
+            q[0] = (q[0] - u0) * it;
+            q[1] = (q[1] - v0) * it;
+        }
+    }
+
+    /// Deposits segment a–b (light space) into `m`, each piece (at most two texels long) into
+    /// the first map behind it.
+    fn deposit(&self, m: &mut [f32], a: [f32; 3], b: [f32; 3]) {
+        let (du, dv) = (b[0] - a[0], b[1] - a[1]);
+        let len = (du * du + dv * dv).sqrt();
+        // Pieces up to two texels long: the bilinear splat spreads each over a 2×2 footprint,
+        // so the deposit stays continuous at half the cost of one piece per texel.
+        let pieces = super::raster::ceil_pos(0.5 * len).max(1);
+        let w = len / pieces as f32;
+        let step = 1.0 / pieces as f32;
+        let inv_dz = 1.0 / self.dz;
+        let s = self.size;
+        let max = (s - 2) as f32;
+        let top = (MAPS - 1) as f32;
+        let mut t = 0.5 * step;
+        for _ in 0..pieces {
+            // Texel centres are at integer + 0.5.
+            let x = (a[0] + du * t - 0.5).clamp(0.0, max);
+            let y = (a[1] + dv * t - 0.5).clamp(0.0, max);
+            let z = a[2] + (b[2] - a[2]) * t;
+            t += step;
+            let map = super::raster::ceil_pos(((z - self.z0) * inv_dz).min(top));
+            let (xi, yi) = (x as i32 as usize, y as i32 as usize);
+            let (fx, fy) = (x - xi as i32 as f32, y - yi as i32 as f32);
+            let base = (yi * s + xi) * MAPS + map;
+            m[base] += w * (1.0 - fx) * (1.0 - fy);
+            m[base + MAPS] += w * fx * (1.0 - fy);
+            m[base + s * MAPS] += w * (1.0 - fx) * fy;
+            m[base + (s + 1) * MAPS] += w * fx * fy;
+        }
+    }
+
+    /// The light-space position of world point `p` (u, v in texels, z in metres).
+    #[inline]
+    pub fn light_space(&self, p: [f32; 3]) -> [f32; 3] {
+        [
+            (dot(p, self.ax_u) - self.u0) * self.inv_texel,
+            (dot(p, self.ax_v) - self.v0) * self.inv_texel,
+            dot(p, self.ax_d),
+        ]
+    }
+
+    /// Light-space position of strand point `i` of the last build.
+    #[inline]
+    pub fn point(&self, i: usize) -> [f32; 3] {
+        self.lp[i]
+    }
+
+    /// The opacity Ω (strand crossings) at light-space position `q`, looked up `bias` map
+    /// spacings nearer the light.
+    #[inline]
+    pub fn opacity(&self, q: [f32; 3], bias: f32) -> f32 {
+        let f = (q[2] - self.z0) / self.dz - bias;
+        let (i, w0, w1) = if f <= 0.0 {
+            (0, (1.0 + f).max(0.0), 0.0)
+        } else if f >= (MAPS - 1) as f32 {
+            (MAPS - 2, 0.0, 1.0)
+        } else {
+            let i = f as i32 as usize;
+            let w = f - i as i32 as f32;
+            (i, 1.0 - w, w)
+        };
+        let s = self.size;
+        let max = (s - 2) as f32;
+        let x = (q[0] - 0.5).clamp(0.0, max);
+        let y = (q[1] - 0.5).clamp(0.0, max);
+        let (xi, yi) = (x as i32 as usize, y as i32 as usize);
+        let (fx, fy) = (x - xi as i32 as f32, y - yi as i32 as f32);
+        let base = (yi * s + xi) * MAPS + i;
+        let o = &self.omega;
+        let at = |b: usize| w0 * o[b] + w1 * o[b + 1];
+        let top = at(base) * (1.0 - fx) + at(base + MAPS) * fx;
+        let bottom = at(base + s * MAPS) * (1.0 - fx) + at(base + (s + 1) * MAPS) * fx;
+        top * (1.0 - fy) + bottom * fy
+    }
+
+    /// The 16 opacities Ω_0..Ω_15 at texel (x, y) (for tests).
+    pub fn texel(&self, x: usize, y: usize) -> &[f32] {
+        let b = (y * self.size + x) * MAPS;
+        &self.omega[b..b + MAPS]
+    }
+
+    /// Depth of map 0 along the light direction, metres.
+    pub fn first_depth(&self) -> f32 {
+        self.z0
+    }
+}
