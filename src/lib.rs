@@ -1,3 +1,4 @@
+#![warn(missing_docs)]
 //! wisptree: long hair animated with the Adaptive Wisp Tree (Bertails, Kim, Cani, Neumann,
 //! SCA 2003), streamed live to the Rerun viewer or to a `.rrd` recording, beside the models the
 //! AWT grew from.
@@ -32,8 +33,8 @@ pub mod frame;
 pub mod model;
 pub mod motion;
 pub mod pipeline;
-pub mod report;
 pub mod render;
+pub mod report;
 pub mod scene;
 pub mod solver;
 pub mod stream;

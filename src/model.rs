@@ -42,6 +42,7 @@ pub struct Level {
 }
 
 impl Level {
+    /// Number of GCs on the level.
     pub fn gc_count(&self) -> usize {
         self.super_gc.len()
     }
@@ -60,9 +61,11 @@ pub struct Strands {
 }
 
 impl Strands {
+    /// Number of strands.
     pub fn len(&self) -> usize {
         self.finest_gc.len()
     }
+    /// No strand.
     pub fn is_empty(&self) -> bool {
         self.finest_gc.is_empty()
     }
@@ -77,16 +80,21 @@ pub struct HairModel {
     pub levels: Vec<Level>,
     /// Names of the top-level GCs (trees).
     pub tree_names: Vec<String>,
+    /// The strands, resampled and bound to their finest GCs.
     pub strands: Strands,
     /// Mass of one strand, kg.
     pub strand_mass: f64,
+    /// Mass of all the hair, kg.
     pub total_mass: f64,
     /// Length of the longest strand as given (before resampling, curls included), m.
     pub longest_strand: f64,
+    /// How the nodes are linked (rigid or springs).
     pub link: Link,
     /// Scalp ellipsoid (centre, radii) and body spheres in the rest pose.
     pub scalp_center: Vector3<f64>,
+    /// Scalp ellipsoid semi-axes, m.
     pub scalp_radii: Vector3<f64>,
+    /// Collision spheres in the rest pose.
     pub body: Vec<Sphere>,
     /// What the import had to tell the user (skipped strands), from [`RawHair::notes`].
     pub notes: Vec<String>,
@@ -321,10 +329,12 @@ impl HairModel {
         }
     }
 
+    /// Number of levels of detail.
     pub fn level_count(&self) -> usize {
         self.levels.len()
     }
 
+    /// The finest level.
     pub fn finest(&self) -> &Level {
         self.levels.last().expect("a model has at least one level")
     }

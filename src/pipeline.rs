@@ -33,6 +33,7 @@ impl FrameBuilder {
         }
     }
 
+    /// Strands drawn per frame.
     pub fn strand_count(&self) -> usize {
         self.strands.len()
     }

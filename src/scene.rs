@@ -17,11 +17,15 @@ use crate::style::{LoadedStyle, SimParams, StyleError};
 pub struct Scene {
     /// Where the style came from (a file is watched while live; a built-in name is not).
     pub source: StyleSource,
+    /// The parsed and validated style.
     pub loaded: LoadedStyle,
+    /// The model built from it, shared by every solver of the scene.
     pub model: Arc<HairModel>,
     /// The `--motion` argument, kept to rebuild the motion on a reloaded model.
     pub motion_spec: String,
+    /// The motion.
     pub motion: Motion,
+    /// Which hair model [`Scene::solver`] builds.
     pub solver: SolverKind,
 }
 

@@ -171,6 +171,7 @@ impl StyleWatcher {
         })
     }
 
+    /// The watched file.
     pub fn path(&self) -> &Path {
         &self.path
     }
@@ -212,9 +213,13 @@ pub enum KeyAction {
     MergeUp,
     /// Merge velocity threshold ÷ [`KEY_STEP`] (harder merges).
     MergeDown,
+    /// Pause or resume (space).
     TogglePause,
+    /// Restart with the parameters in force (r).
     Restart,
+    /// Stop the run (q, Ctrl-C).
     Quit,
+    /// Show the keys (h).
     Help,
 }
 

@@ -50,6 +50,7 @@ pub struct RunArgs {
     pub no_watch: bool,
 
     #[command(flatten)]
+    /// Where the recording goes.
     pub sink: SinkArgs,
 }
 

@@ -61,7 +61,9 @@ pub struct ExperimentRun {
 /// What `wisptree experiment NAME --json FILE` writes.
 #[derive(Debug, Clone, serde::Serialize)]
 pub struct ExperimentReport {
+    /// The experiment's name.
     pub experiment: String,
+    /// Every run, in order.
     pub runs: Vec<ExperimentRun>,
 }
 

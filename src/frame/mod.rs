@@ -9,7 +9,9 @@ use crate::report::{AdaptEvent, Counters, Stat};
 /// Active nodes of the AWT (paper Fig. 4: spheres).
 #[derive(Debug, Clone, Default)]
 pub struct NodeBuf {
+    /// Centres, m.
     pub positions: Vec<[f32; 3]>,
+    /// Radii, m.
     pub radii: Vec<f32>,
     /// Level of detail, 0 = coarsest; the annotation class id.
     pub levels: Vec<u16>,
@@ -18,9 +20,13 @@ pub struct NodeBuf {
 /// Active segments (paper Fig. 4: cylinders), parent → child, with the child's radius and level.
 #[derive(Debug, Clone, Default)]
 pub struct SegmentBuf {
+    /// Parent ends, m.
     pub starts: Vec<[f32; 3]>,
+    /// Child ends, m.
     pub ends: Vec<[f32; 3]>,
+    /// The child's radius, m.
     pub radii: Vec<f32>,
+    /// The child's level.
     pub levels: Vec<u16>,
 }
 
@@ -28,18 +34,22 @@ pub struct SegmentBuf {
 /// `points[offsets[s] as usize .. offsets[s + 1] as usize]`.
 #[derive(Debug, Clone, Default)]
 pub struct StrandBuf {
+    /// Every strand's points, strand after strand.
     pub points: Vec<[f32; 3]>,
     /// `strands + 1` entries, starting with 0.
     pub offsets: Vec<u32>,
 }
 
 impl StrandBuf {
+    /// Number of strands.
     pub fn len(&self) -> usize {
         self.offsets.len().saturating_sub(1)
     }
+    /// No strand.
     pub fn is_empty(&self) -> bool {
         self.len() == 0
     }
+    /// The points of strand `s`.
     pub fn strand(&self, s: usize) -> &[[f32; 3]] {
         &self.points[self.offsets[s] as usize..self.offsets[s + 1] as usize]
     }
@@ -48,9 +58,13 @@ impl StrandBuf {
 /// Head and body as posed this frame.
 #[derive(Debug, Clone, Default)]
 pub struct BodyBuf {
+    /// Collision sphere centres, m.
     pub sphere_centers: Vec<[f32; 3]>,
+    /// Collision sphere radii, m.
     pub sphere_radii: Vec<f32>,
+    /// Scalp ellipsoid centre, m.
     pub scalp_center: [f32; 3],
+    /// Scalp ellipsoid semi-axes, m.
     pub scalp_radii: [f32; 3],
     /// Scalp orientation as a quaternion (x, y, z, w).
     pub scalp_rotation: [f32; 4],
@@ -74,7 +88,9 @@ pub enum PrimitiveKind {
 pub struct PrimitiveSet {
     /// Entity path, `/hair/<solver>/<name>` (an interface: see README).
     pub path: &'static str,
+    /// What the points are.
     pub kind: PrimitiveKind,
+    /// Points, strip points, or triangle corners.
     pub points: Vec<[f32; 3]>,
     /// Line strips only: `strips + 1` entries starting with 0.
     pub offsets: Vec<u32>,
@@ -130,9 +146,13 @@ pub struct Frame {
     pub index: u64,
     /// Simulated time at the end of the frame, s (the `sim_time` timeline).
     pub sim_time: f64,
+    /// The solver's nodes (AWT: the active nodes).
     pub nodes: NodeBuf,
+    /// The solver's segments.
     pub segments: SegmentBuf,
+    /// The drawn strands, smoothed.
     pub strands: StrandBuf,
+    /// Head and body as posed.
     pub body: BodyBuf,
     /// Every split and merge of the frame's steps, in order.
     pub events: Vec<AdaptEvent>,
@@ -142,6 +162,7 @@ pub struct Frame {
     pub step_ms: f64,
     /// Splits and merges in this frame.
     pub splits: u32,
+    /// Merges in this frame.
     pub merges: u32,
     /// Frames dropped so far because the logger fell behind (live only).
     pub dropped_frames: u64,

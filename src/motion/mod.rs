@@ -68,29 +68,44 @@ impl Pose {
 #[derive(Debug, thiserror::Error)]
 pub enum MotionError {
     #[error("unknown motion `{spec}`: expected one of the presets {} or a path to a keyframed `.ron` motion", presets.join(", "))]
+    /// A motion name that is neither a preset nor a file.
     UnknownPreset {
+        /// What was given.
         spec: String,
+        /// The presets there are.
         presets: Vec<&'static str>,
     },
     #[error("{path}: cannot read motion file: {source}")]
+    /// A motion file that cannot be read.
     Io {
+        /// The file.
         path: PathBuf,
         #[source]
+        /// Why.
         source: std::io::Error,
     },
     #[error("{path}:{line}:{col}: {msg}")]
+    /// A motion file that is not valid RON.
     Parse {
+        /// The file.
         path: PathBuf,
+        /// Line, from 1.
         line: usize,
+        /// Column, from 1.
         col: usize,
+        /// What is wrong.
         msg: String,
     },
     #[error("{path}{}: field `{field}`: {msg}", pos.map(|(l, c)| format!(":{l}:{c}")).unwrap_or_default())]
+    /// A value in a motion file that is out of range.
     Invalid {
+        /// The file.
         path: PathBuf,
         /// Line and column of the offending field, when it can be found in the text.
         pos: Option<(usize, usize)>,
+        /// The field, as a dotted path.
         field: String,
+        /// What is wrong.
         msg: String,
     },
 }

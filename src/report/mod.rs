@@ -93,6 +93,7 @@ pub enum Aggregate {
 pub struct Stat {
     /// The entity path, `/stats/<name>` (an interface: documented in README).
     pub path: &'static str,
+    /// The value (unit in the path's documentation).
     pub value: f64,
     /// How the frame's value is made from its steps'.
     pub aggregate: Aggregate,
@@ -108,6 +109,7 @@ impl Stat {
 /// One split or merge.
 #[derive(Debug, Clone, PartialEq)]
 pub struct AdaptEvent {
+    /// What happened.
     pub kind: EventKind,
     /// Simulated time at the end of the step in which it happened, s.
     pub time: f64,
@@ -225,13 +227,16 @@ pub struct Counters {
     pub body_contacts: u32,
     /// Kinetic energy of the active nodes, J.
     pub kinetic_energy: f64,
+    /// Wall time per stage.
     pub times: StageTimes,
 }
 
 /// What `Simulation::step` returns. Reused between steps: `events` is cleared, not reallocated.
 #[derive(Debug, Clone, Default)]
 pub struct StepReport {
+    /// Events of the step, in order.
     pub events: Vec<AdaptEvent>,
+    /// The common counters.
     pub counters: Counters,
     /// Stats particular to the solver (`/stats/collisions`, `/stats/links_intact`, …), beside
     /// the common [`Counters`]. Cleared by the solver at the start of a step.

@@ -329,7 +329,7 @@ pub fn runs_blueprint(labels: &[String]) -> rerun::blueprint::Blueprint {
     let columns = (labels.len() as f64).sqrt().ceil().max(1.0) as u32;
     let series = TimeSeriesView::new("every run")
         .with_origin("/runs")
-        .with_contents(["+ /runs/*/stats/**".to_owned()]);
+        .with_contents(labels.iter().map(|l| format!("+ /runs/{l}/stats/**")));
     Blueprint::new(
         Vertical::new([
             Grid::new(views).with_grid_columns(columns).into(),

@@ -46,9 +46,13 @@ use crate::report::{AdaptEvent, EventKind};
 /// Severity of a free-text message on `/log`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum MessageLevel {
+    /// Details.
     Debug,
+    /// Normal messages.
     Info,
+    /// Something the user should look at.
     Warn,
+    /// Something failed.
     Error,
 }
 

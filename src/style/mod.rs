@@ -25,39 +25,74 @@ pub enum StyleError {
     /// `{:#}` would say it twice.)
     #[error("{path}: cannot read: {error}")]
     Io {
+        /// The file.
         path: PathBuf,
+        /// Why it cannot be read.
         error: std::io::Error,
     },
     #[error("{path}: no such file (and not a built-in style: {builtins})")]
-    Missing { path: PathBuf, builtins: String },
-    #[error("{path}: the file is empty")]
-    Empty { path: PathBuf },
-    #[error("{path}:{line}:{col}: {msg}")]
-    Parse {
+    /// A style path that is neither a file nor a built-in name.
+    Missing {
+        /// The path given.
         path: PathBuf,
+        /// The built-in names.
+        builtins: String,
+    },
+    #[error("{path}: the file is empty")]
+    /// An empty file.
+    Empty {
+        /// The file.
+        path: PathBuf,
+    },
+    #[error("{path}:{line}:{col}: {msg}")]
+    /// Not valid RON.
+    Parse {
+        /// The file.
+        path: PathBuf,
+        /// Line, from 1.
         line: usize,
+        /// Column, from 1.
         col: usize,
+        /// What is wrong.
         msg: String,
     },
     #[error("{path}{}: field `{field}`: {msg}", line.map(|l| format!(":{l}")).unwrap_or_default())]
+    /// A value out of range.
     Invalid {
+        /// The file.
         path: PathBuf,
+        /// The line of the field, where it can be found.
         line: Option<usize>,
+        /// The field, as a dotted path.
         field: String,
+        /// What is wrong.
         msg: String,
     },
     #[error("{path}: {msg}")]
-    Tfx { path: PathBuf, msg: String },
+    /// A TressFX file that cannot be read.
+    Tfx {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong.
+        msg: String,
+    },
     /// A corrupt `.hair` or `.data` strand file; the message names the byte offset.
     #[error("{path}: {msg}")]
-    StrandFile { path: PathBuf, msg: String },
+    StrandFile {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong, with the byte offset.
+        msg: String,
+    },
 }
 
 /// A parsed, validated style and where it came from (relative paths inside it are resolved
 /// against the style file's folder).
 #[derive(Debug, Clone)]
 pub struct LoadedStyle {
+    /// The file (or `<built-in style NAME>`).
     pub path: PathBuf,
+    /// The style.
     pub style: Style,
     /// Collision spheres after resolving `TressFx.project`, if any (else `style.head.body`).
     pub body: Vec<Sphere>,
@@ -66,7 +101,9 @@ pub struct LoadedStyle {
 /// One strand before resampling: its top-level wisp and its polyline, root first.
 #[derive(Debug, Clone, PartialEq)]
 pub struct RawStrand {
+    /// Index of its top-level wisp in `RawHair::wisp_names`.
     pub wisp: u32,
+    /// Points, root first, m.
     pub points: Vec<[f64; 3]>,
 }
 
@@ -74,7 +111,9 @@ pub struct RawStrand {
 /// not known yet (`wisp_names` is empty and every `wisp` is 0): the model clusters them.
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct RawHair {
+    /// Names of the top-level wisps.
     pub wisp_names: Vec<String>,
+    /// The strands.
     pub strands: Vec<RawStrand>,
     /// What the user should be told about the import (strands skipped, and why).
     pub notes: Vec<String>,

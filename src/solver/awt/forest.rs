@@ -20,6 +20,7 @@ use crate::report::{AdaptEvent, EventKind};
 pub struct LevelState {
     /// Position: current for active nodes; the last followed position otherwise.
     pub pos: Vec<Vector3<f64>>,
+    /// Velocity.
     pub vel: Vec<Vector3<f64>>,
     /// Smoothed world-frame acceleration (active nodes), used by the split test.
     pub acc: Vec<Vector3<f64>>,
@@ -37,7 +38,9 @@ pub struct LevelState {
 /// The forest of AWTs: one per top-level GC, all sharing the per-level arrays.
 #[derive(Debug, Clone, Default)]
 pub struct Forest {
+    /// Per level, per node: active or not.
     pub active: Vec<Vec<bool>>,
+    /// Per level: the nodes' state.
     pub state: Vec<LevelState>,
     /// Slot of each active node in `Simulation::slots` (stale for non-active nodes).
     pub slot_of: Vec<Vec<u32>>,

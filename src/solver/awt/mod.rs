@@ -65,19 +65,27 @@ pub const NO_SLOT: u32 = u32::MAX;
 /// Parameters that may change while the simulation runs (keyboard, style reload).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Tunables {
+    /// The simulation parameters.
     pub params: SimParams,
+    /// The link model.
     pub link: Link,
 }
 
 /// A running simulation of one hair model under one motion.
 pub struct Simulation {
+    /// The hair model.
     pub model: Arc<HairModel>,
+    /// The motion of the head and body.
     pub motion: Motion,
+    /// The parameters in force.
     pub params: SimParams,
+    /// The link model in force.
     pub link: Link,
     /// Every finest node active and no adaptation (the §5.2 comparison).
     pub single_level: bool,
+    /// Every node of every level (state, active set, offsets).
     pub forest: Forest,
+    /// The active nodes in compact arrays.
     pub slots: Slots,
     time: f64,
     steps: u64,
@@ -163,6 +171,7 @@ impl Simulation {
         self.collider.set_threads(threads);
     }
 
+    /// Threads of the hair–hair pair search.
     pub fn threads(&self) -> usize {
         self.collider.threads()
     }
@@ -218,12 +227,15 @@ impl Simulation {
         )
     }
 
+    /// Simulated time, s.
     pub fn time(&self) -> f64 {
         self.time
     }
+    /// Steps since t = 0.
     pub fn steps(&self) -> u64 {
         self.steps
     }
+    /// The head and body pose now.
     pub fn pose(&self) -> &Pose {
         &self.pose
     }

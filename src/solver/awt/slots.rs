@@ -10,26 +10,37 @@ use super::{collide, Simulation, NO_SLOT};
 pub struct Slots {
     /// Level and node index (`g * K + i`) of each slot.
     pub level: Vec<u8>,
+    /// Node index on its level (`g * K + i`).
     pub node: Vec<u32>,
     /// Cross-section index.
     pub cs: Vec<u16>,
     /// Parent slot (`NO_SLOT` for roots, which are kinematic).
     pub parent: Vec<u32>,
+    /// Position, m.
     pub pos: Vec<Vector3<f64>>,
+    /// Position at the start of the step, m.
     pub prev_pos: Vec<Vector3<f64>>,
+    /// Velocity, m/s.
     pub vel: Vec<Vector3<f64>>,
+    /// Velocity at the start of the step, m/s.
     pub vel_start: Vec<Vector3<f64>>,
+    /// Smoothed acceleration (the split test), m/s².
     pub acc: Vec<Vector3<f64>>,
+    /// Accumulated force of the step, N.
     pub force: Vec<Vector3<f64>>,
+    /// Mass, kg.
     pub mass: Vec<f64>,
     /// Mass carried by the link ending at the node (node to tip of its GC).
     pub mass_below: Vec<f64>,
+    /// Radius, m.
     pub radius: Vec<f64>,
     /// Rest vector from the parent to this node in the rest pose (the styled direction).
     pub rest_vec: Vec<Vector3<f64>>,
+    /// Rest length of the link from the parent, m.
     pub rest_len: Vec<f64>,
     /// Scratch: positions before the body stage, and which nodes the body touched this step.
     pub pre_body: Vec<Vector3<f64>>,
+    /// Touched by the body this step.
     pub contact: Vec<bool>,
     /// Segments (non-root slots) for the collider.
     pub segs: Segments,
@@ -40,15 +51,18 @@ pub struct Slots {
 pub struct Segments {
     /// Parent and child slot.
     pub parent: Vec<u32>,
+    /// The child slot.
     pub child: Vec<u32>,
     /// The child's radius (AWT §4.1) and mass.
     pub radius: Vec<f64>,
+    /// The child's mass, kg.
     pub mass: Vec<f64>,
     /// The generalized cylinder `(level, GC)` of the child node, numbered over all levels.
     pub chain: Vec<u32>,
 }
 
 impl Segments {
+    /// The segments as the collider reads them.
     pub fn view(&self) -> collide::SegmentsView<'_> {
         collide::SegmentsView {
             parent: &self.parent,
@@ -59,10 +73,12 @@ impl Segments {
         }
     }
 
+    /// Number of segments.
     pub fn len(&self) -> usize {
         self.child.len()
     }
 
+    /// No segment.
     pub fn is_empty(&self) -> bool {
         self.child.is_empty()
     }
@@ -107,9 +123,11 @@ impl Slots {
         self.segs.reserve(n);
     }
 
+    /// Number of active nodes.
     pub fn len(&self) -> usize {
         self.level.len()
     }
+    /// No active node.
     pub fn is_empty(&self) -> bool {
         self.level.is_empty()
     }

@@ -53,6 +53,7 @@ pub fn scalp_normal(e: &Ellipsoid, p: V3) -> V3 {
 /// The styling frame of Zhang & Wünsche §3.1 at a scalp point.
 #[derive(Debug, Clone, Copy)]
 pub struct Frame {
+    /// The point on the scalp.
     pub origin: V3,
     /// Down the scalp, towards decreasing elevation.
     pub t: V3,

@@ -7,7 +7,9 @@ use super::*;
 /// A sphere of the body proxy (AWT §4.3).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct BodySphere {
+    /// Centre, m (posed).
     pub center: Vector3<f64>,
+    /// Radius, m.
     pub radius: f64,
 }
 

@@ -53,6 +53,7 @@ impl Default for HairCollider {
 }
 
 impl HairCollider {
+    /// A collider with no buffer reserved.
     pub fn new() -> Self {
         Self::default()
     }
@@ -96,6 +97,7 @@ impl HairCollider {
         }
     }
 
+    /// Threads of the pair search.
     pub fn threads(&self) -> usize {
         self.threads
     }

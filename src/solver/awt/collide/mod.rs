@@ -123,6 +123,7 @@ impl SegmentsView<'_> {
         n
     }
 
+    /// No segment.
     pub fn is_empty(&self) -> bool {
         self.len() == 0
     }
@@ -150,13 +151,17 @@ pub struct ContactParams {
 /// buffer of the step (tens of thousands of entries), so halving it keeps it in cache.
 #[derive(Debug, Clone, Copy)]
 pub struct Contact {
+    /// The first segment of the pair.
     pub a: u32,
+    /// The second segment.
     pub b: u32,
     /// Closest points as fractions from parent (0) to child (1) on `a` and `b`.
     pub s: f64,
+    /// Closest-point parameter on the second segment.
     pub t: f64,
     /// Friction (eq. 1) and repulsion (eq. 2) on `a`; `b` gets the opposite.
     pub friction: [f32; 3],
+    /// Repulsion force on the first segment, N.
     pub repulsion: [f32; 3],
 }
 
