@@ -61,6 +61,22 @@ impl FrameBuilder {
     }
 }
 
+impl FrameBuilder {
+    /// Writes the builder's strands (smoothed) into `out`, after [`FrameBuilder::fill`] (or
+    /// [`Solver::sync_display`]) brought the solver's display state up to date.
+    pub fn fill_strands(&mut self, solver: &dyn Solver, out: &mut crate::frame::StrandBuf) {
+        out.points.clear();
+        out.offsets.clear();
+        out.offsets.push(0);
+        for &st in &self.strands {
+            self.scratch.clear();
+            solver.strand_points(st as usize, &mut self.scratch);
+            catmull_rom(&self.scratch, self.subdivisions, &mut out.points);
+            out.offsets.push(out.points.len() as u32);
+        }
+    }
+}
+
 /// Poses the model's body spheres and scalp into `body`.
 pub fn fill_body(m: &crate::model::HairModel, pose: &crate::motion::Pose, body: &mut BodyBuf) {
     use nalgebra::{Point3, Vector3};
@@ -108,30 +124,6 @@ pub fn catmull_rom(p: &[nalgebra::Vector3<f64>], sub: usize, out: &mut Vec<[f32;
         }
     }
     out.push(to32(p[n - 1]));
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use nalgebra::Vector3;
-
-    #[test]
-    fn catmull_rom_interpolates_its_control_points() {
-        let p: Vec<Vector3<f64>> = (0..5)
-            .map(|i| Vector3::new(i as f64, (i as f64).sin(), 0.0))
-            .collect();
-        let mut out = Vec::new();
-        catmull_rom(&p, 4, &mut out);
-        assert_eq!(out.len(), 4 * 4 + 1);
-        for (i, q) in p.iter().enumerate() {
-            let o = out[i * 4];
-            assert!((o[0] as f64 - q.x).abs() < 1e-6 && (o[1] as f64 - q.y).abs() < 1e-6);
-        }
-        // Between control points it is smooth, not the chord: the midpoint bulges.
-        let mid = out[2];
-        let chord = (p[0] + p[1]) * 0.5;
-        assert!((mid[1] as f64 - chord.y).abs() > 1e-3);
-    }
 }
 
 /// Steps one displayed frame: `steps_per_frame` steps, with the frame's events in order, its
@@ -239,4 +231,28 @@ pub fn fill_stats(frame: &mut Frame, params: &crate::style::SimParams) {
     push(p::DROPPED_FRAMES, frame.dropped_frames as f64);
     push(p::SPLIT_THRESHOLD, params.split_threshold);
     push(p::MERGE_VELOCITY, params.merge_velocity);
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nalgebra::Vector3;
+
+    #[test]
+    fn catmull_rom_interpolates_its_control_points() {
+        let p: Vec<Vector3<f64>> = (0..5)
+            .map(|i| Vector3::new(i as f64, (i as f64).sin(), 0.0))
+            .collect();
+        let mut out = Vec::new();
+        catmull_rom(&p, 4, &mut out);
+        assert_eq!(out.len(), 4 * 4 + 1);
+        for (i, q) in p.iter().enumerate() {
+            let o = out[i * 4];
+            assert!((o[0] as f64 - q.x).abs() < 1e-6 && (o[1] as f64 - q.y).abs() < 1e-6);
+        }
+        // Between control points it is smooth, not the chord: the midpoint bulges.
+        let mid = out[2];
+        let chord = (p[0] + p[1]) * 0.5;
+        assert!((mid[1] as f64 - chord.y).abs() > 1e-3);
+    }
 }

@@ -217,3 +217,32 @@ pub fn warnings(model: &HairModel) -> Vec<String> {
     }
     out
 }
+
+impl Scene {
+    /// The box the hair sweeps during the first seconds of the motion, world metres: every
+    /// seventh strand's rest points carried by the head's pose every quarter second for 5 s.
+    /// The renderer's camera and the 3D view's starting eye both frame it.
+    pub fn hair_extent(&self) -> ([f32; 3], [f32; 3]) {
+        let m = &self.model;
+        let mut lo = [f32::INFINITY; 3];
+        let mut hi = [f32::NEG_INFINITY; 3];
+        for q in 0..=20 {
+            let pose = self.motion.pose(q as f64 * 0.25);
+            for (j, p) in m.strands.rest.iter().enumerate() {
+                if (j / m.k) % 7 != 0 {
+                    continue;
+                }
+                let w = pose.transform_point(&nalgebra::Point3::from(*p));
+                for a in 0..3 {
+                    lo[a] = lo[a].min(w[a] as f32);
+                    hi[a] = hi[a].max(w[a] as f32);
+                }
+            }
+        }
+        if !lo[0].is_finite() {
+            let c = self.camera_target();
+            return (c, c);
+        }
+        (lo, hi)
+    }
+}

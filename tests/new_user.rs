@@ -213,7 +213,8 @@ fn strand(x: f32, z: f32) -> Vec<[f32; 3]> {
 
 #[test]
 fn degenerate_imported_strands_exit_2_with_the_reason() {
-    let cases: Vec<(&str, Vec<Vec<[f32; 3]>>, &str)> = vec![
+    type Case = (&'static str, Vec<Vec<[f32; 3]>>, &'static str);
+    let cases: Vec<Case> = vec![
         (
             "overflowing coordinate",
             vec![

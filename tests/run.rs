@@ -69,6 +69,7 @@ fn args(style: &Path, out: &Path, seconds: f64, watch: bool) -> RunOptions {
         strands: STRANDS,
         watch: Some(watch),
         sink: SinkChoice::Save(out.to_path_buf()),
+        render: None,
     }
 }
 
@@ -538,4 +539,28 @@ fn a_watched_geometry_edit_restarts_on_the_new_model() {
         node_rows.iter().map(|r| r.0).collect::<Vec<_>>(),
         (0..summary.frames_logged as i64).collect::<Vec<_>>()
     );
+}
+
+#[test]
+fn a_recording_with_rendering_has_one_jpeg_per_frame_beside_the_debug_view() {
+    let dir = tempfile::tempdir().unwrap();
+    let style = write_style(dir.path(), "0.2");
+    let out = dir.path().join("render.rrd");
+    let mut opts = args(&style, &out, 0.4, false);
+    opts.render = Some((160, 120));
+    let summary = run::run_with(opts, StopSignal::new()).expect("run");
+    let frames = summary.frames_logged as i64;
+    assert!(frames >= 10);
+    let chunks = decode_file(&out);
+    let blob = rerun::EncodedImage::descriptor_blob().component;
+    let images = rows(&chunks, wisptree::stream::paths::RENDER, blob);
+    assert_eq!(
+        images,
+        (0..frames).map(|f| (f, 1)).collect::<Vec<_>>(),
+        "one image per frame when recording"
+    );
+    // Nothing is skipped when recording.
+    let skipped = scalars(&chunks, "/stats/render_skipped");
+    assert_eq!(skipped.len() as i64, frames);
+    assert!(skipped.iter().all(|(_, v)| *v == 0.0), "{skipped:?}");
 }

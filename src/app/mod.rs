@@ -6,6 +6,8 @@ pub mod experiment;
 pub mod export;
 mod log_thread;
 mod reload;
+pub mod render_cmd;
+pub mod render_thread;
 pub mod run;
 mod sim_thread;
 pub mod stop;

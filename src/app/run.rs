@@ -60,6 +60,8 @@ pub struct RunOptions {
     pub watch: Option<bool>,
     /// Where the recording goes.
     pub sink: SinkChoice,
+    /// Render the hair beside the debug view at this size; `None`: off (`--no-render`).
+    pub render: Option<(u32, u32)>,
 }
 
 impl Default for RunOptions {
@@ -72,6 +74,7 @@ impl Default for RunOptions {
             strands: DEFAULT_STRANDS,
             watch: None,
             sink: SinkChoice::Auto,
+            render: Some(super::render_thread::DEFAULT_RENDER_SIZE),
         }
     }
 }
@@ -141,6 +144,7 @@ pub fn run_with(opts: RunOptions, stop: StopSignal) -> anyhow::Result<RunSummary
         keys: sink.live,
         progress: sink.file.is_some(),
         strands: opts.strands,
+        render: opts.render,
     };
     let file = sink.file.clone();
     let summary = simulate(&scene, sink, &loop_opts, &stop)?;

@@ -52,6 +52,8 @@ pub struct SimThread {
     pub scene: Scene,
     /// Strands drawn per frame.
     pub strands: usize,
+    /// Fill every strand of the model for the renderer.
+    pub render: bool,
     /// Frames to produce; `None` until stopped.
     pub frames_total: Option<u64>,
     /// Keep to wall-clock time and drop frames rather than block.
@@ -68,6 +70,8 @@ pub struct SimThread {
 struct LoopState {
     solver: Box<dyn Solver>,
     builder: FrameBuilder,
+    /// All strands, for the renderer (when rendering).
+    render_builder: Option<FrameBuilder>,
     messages: Vec<String>,
     paused: bool,
     time_offset: f64,
@@ -80,6 +84,9 @@ impl SimThread {
         let mut st = LoopState {
             solver: self.scene.solver(),
             builder: FrameBuilder::new(&self.scene.model, self.strands, super::STRAND_SUBDIVISIONS),
+            render_builder: self.render.then(|| {
+                FrameBuilder::new(&self.scene.model, usize::MAX, super::STRAND_SUBDIVISIONS)
+            }),
             messages: Vec::new(),
             paused: false,
             time_offset: 0.0,
@@ -164,6 +171,13 @@ impl SimThread {
                         self.strands,
                         super::STRAND_SUBDIVISIONS,
                     );
+                    if st.render_builder.is_some() {
+                        st.render_builder = Some(FrameBuilder::new(
+                            &self.scene.model,
+                            usize::MAX,
+                            super::STRAND_SUBDIVISIONS,
+                        ));
+                    }
                     st.out.restarts += 1;
                 }
                 Control::Key(KeyAction::TogglePause) => {
@@ -203,6 +217,10 @@ fn make_frame(
 ) {
     f.step_ms = pipeline::step_frame(&mut *st.solver, report, f);
     st.builder.fill(&mut *st.solver, f);
+    match st.render_builder.as_mut() {
+        Some(b) => b.fill_strands(&*st.solver, &mut f.render_strands),
+        None => f.render_strands.clear(),
+    }
     f.index = index;
     f.sim_time += st.time_offset;
     f.dropped_frames = st.out.dropped;

@@ -48,6 +48,8 @@ pub struct LoopOptions {
     pub progress: bool,
     /// Strands drawn per frame.
     pub strands: usize,
+    /// Render every frame at this size (width, height) on a render thread; `None`: off.
+    pub render: Option<(u32, u32)>,
 }
 
 /// The two worker threads and the channels the main thread keeps.
@@ -139,7 +141,35 @@ fn start_workers(
     stop: &StopSignal,
     console: &Console,
 ) -> anyhow::Result<Workers> {
-    let (frame_tx, frame_rx) = crossbeam_channel::bounded::<Frame>(QUEUE_FRAMES);
+    let (frame_tx, sim_rx) = crossbeam_channel::bounded::<Frame>(QUEUE_FRAMES);
+    // With rendering, frames go simulation → renderer → logger; without, straight through.
+    let (frame_rx, renderer) = match opts.render {
+        Some((w, h)) => {
+            let (tx, rx) = crossbeam_channel::bounded::<Frame>(QUEUE_FRAMES);
+            let r = crate::render::Renderer::new(
+                scene.loaded.style.render.clone(),
+                w,
+                h,
+                crate::solver::awt::default_threads(),
+            )
+            .map_err(|e| crate::error::BadInput(format!("rendering: {e}")))?;
+            let thread = super::render_thread::RenderThread {
+                renderer: r,
+                camera: super::render_thread::scene_camera(scene),
+                input: sim_rx,
+                output: tx,
+                live: opts.live,
+            };
+            (rx, Some(thread))
+        }
+        None => (sim_rx, None),
+    };
+    if let Some(t) = renderer {
+        std::thread::Builder::new()
+            .name("wisptree-render".into())
+            .spawn(move || t.run())
+            .context("starting the render thread")?;
+    }
     // Unbounded, but it never holds more frames than exist: QUEUE_FRAMES + 2 or so.
     let (free_tx, free_rx) = crossbeam_channel::unbounded::<Frame>();
     let (ctl_tx, ctl_rx) = crossbeam_channel::unbounded::<Control>();
@@ -147,13 +177,20 @@ fn start_workers(
     let (done_tx, done_rx) = crossbeam_channel::bounded::<()>(1);
     let logged = Arc::new(AtomicU64::new(0));
 
+    let camera = super::render_thread::scene_camera(scene);
+    let mut setup = LoggerSetup::new(
+        scene.model.level_count() as u16,
+        &scene.style_name(),
+        scene.camera_target(),
+    );
+    setup.camera = Some(crate::stream::BlueprintCamera {
+        eye: camera.eye,
+        target: camera.target,
+    });
+    setup.render = opts.render.is_some();
     let log = LogThread {
         rec: sink.rec,
-        setup: LoggerSetup::new(
-            scene.model.level_count() as u16,
-            &scene.style_name(),
-            scene.camera_target(),
-        ),
+        setup,
         frames: frame_rx,
         free: free_tx,
         notes: note_rx,
@@ -178,6 +215,7 @@ fn start_workers(
     let sim_thread = SimThread {
         scene: scene.clone(),
         strands: opts.strands,
+        render: opts.render.is_some(),
         frames_total,
         live: opts.live,
         ctl: ctl_rx,

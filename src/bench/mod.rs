@@ -248,7 +248,7 @@ pub fn bench_solver(
     let stats = time_steps(&mut *s, steps, || {
         // The bar counts 10 ms steps, whatever the solver's step.
         k += 1;
-        if k % per_step == 0 {
+        if k.is_multiple_of(per_step) {
             progress.inc(1)
         }
     });

@@ -92,6 +92,8 @@ pub fn time_run_pipeline(
         strands,
         watch: Some(false),
         sink: SinkChoice::Save(rrd.to_path_buf()),
+        // The §5.2 pipeline number is the simulation's; the renderer is timed on its own.
+        render: None,
         ..RunOptions::default()
     };
     let t0 = Instant::now();

@@ -49,8 +49,16 @@ pub struct RunArgs {
     #[arg(long, overrides_with = "watch")]
     pub no_watch: bool,
 
-    #[command(flatten)]
+    /// Do not render the hair (the right half of the AWT paper's Figure 4).
+    #[arg(long)]
+    pub no_render: bool,
+
+    /// Size of the rendered image, WIDTHxHEIGHT pixels.
+    #[arg(long, value_name = "WxH", default_value = "640x480", value_parser = parse_size)]
+    pub render_size: (u32, u32),
+
     /// Where the recording goes.
+    #[command(flatten)]
     pub sink: SinkArgs,
 }
 
@@ -73,6 +81,7 @@ impl RunArgs {
                 _ => None,
             },
             sink: self.sink.choice(),
+            render: (!self.no_render).then_some(self.render_size),
         }
     }
 }
@@ -120,6 +129,23 @@ impl SinkArgs {
             SinkChoice::Auto
         }
     }
+}
+
+/// `--render-size WxH`: two whole numbers from 16 to 8192.
+pub fn parse_size(s: &str) -> Result<(u32, u32), String> {
+    let bad = || format!("`{s}`: expected WIDTHxHEIGHT in pixels, e.g. 640x480");
+    let (w, h) = s.split_once(['x', 'X']).ok_or_else(bad)?;
+    let w: u32 = w.trim().parse().map_err(|_| bad())?;
+    let h: u32 = h.trim().parse().map_err(|_| bad())?;
+    for v in [w, h] {
+        if !(16..=crate::render::MAX_SIDE).contains(&v) {
+            return Err(format!(
+                "`{s}`: each side must be 16 to {} pixels",
+                crate::render::MAX_SIDE
+            ));
+        }
+    }
+    Ok((w, h))
 }
 
 /// `--model`.

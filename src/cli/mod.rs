@@ -7,6 +7,7 @@ mod bench_args;
 mod experiment_args;
 mod export_args;
 mod inspect;
+mod render_args;
 mod styles;
 
 use clap::{Parser, Subcommand};
@@ -16,6 +17,7 @@ pub use bench_args::BenchArgs;
 pub use experiment_args::ExperimentArgs;
 pub use export_args::ExportArgs;
 pub use inspect::{summarize, InspectArgs, ModelSummary};
+pub use render_args::RenderArgs;
 pub use styles::StylesArgs;
 
 pub use crate::error::{BadInput, EXIT_BAD_INPUT};
@@ -53,6 +55,8 @@ pub enum Command {
     Bench(BenchArgs),
     /// Simulate and write every n-th frame's strands as `.hair` or `.tfx` files.
     Export(ExportArgs),
+    /// Simulate and write the rendered hair of every frame as PNG files.
+    Render(RenderArgs),
     /// Run one of the papers' experiments, record it and print the number it demonstrates.
     Experiment(ExperimentArgs),
 }
@@ -65,6 +69,7 @@ pub fn main() -> i32 {
         Some(Command::Styles(a)) => styles::styles(&a),
         Some(Command::Run(a)) => crate::app::run(a.options()),
         Some(Command::Bench(a)) => a.options().and_then(|o| crate::bench::run(&o)),
+        Some(Command::Render(a)) => crate::app::render_cmd::run(&a.command()).map(|_| ()),
         Some(Command::Experiment(a)) => crate::app::experiment::run(&a.command()),
         Some(Command::Export(a)) => crate::app::export::run(&a.options(), !a.no_progress),
         None => crate::app::run(cli.run.options()),

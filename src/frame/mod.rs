@@ -41,6 +41,12 @@ pub struct StrandBuf {
 }
 
 impl StrandBuf {
+    /// Empties the buffer, keeping its capacity.
+    pub fn clear(&mut self) {
+        self.points.clear();
+        self.offsets.clear();
+    }
+
     /// Number of strands.
     pub fn len(&self) -> usize {
         self.offsets.len().saturating_sub(1)
@@ -180,6 +186,23 @@ pub struct Frame {
     pub stats: Vec<Stat>,
     /// The solver's own stats of this frame, aggregated over its steps (part of `stats`).
     pub solver_stats: Vec<Stat>,
+    /// Every strand of the model, smoothed as for display: the renderer's input (empty when
+    /// rendering is off).
+    pub render_strands: StrandBuf,
+    /// The rendered hair of this frame, if it was rendered (live runs skip frames when the
+    /// renderer falls behind).
+    pub image: Option<EncodedImage>,
+}
+
+/// A rendered frame, encoded for the recording.
+#[derive(Debug, Clone, Default)]
+pub struct EncodedImage {
+    /// JPEG bytes.
+    pub jpeg: Vec<u8>,
+    /// Width, pixels.
+    pub width: u32,
+    /// Height, pixels.
+    pub height: u32,
 }
 
 impl Frame {

@@ -1,6 +1,6 @@
 //! A pinhole camera: right-handed, y up, looking from `eye` towards `target`.
 
-use super::params::RenderParams;
+use crate::style::RenderParams;
 
 /// A perspective camera.
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -20,7 +20,6 @@
 
 pub mod body;
 pub mod camera;
-pub mod params;
 mod pool;
 pub mod raster;
 pub mod resolve;
@@ -33,8 +32,8 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Mutex;
 use std::time::{Duration, Instant};
 
+pub use crate::style::RenderParams;
 pub use camera::{bounds, Camera};
-pub use params::RenderParams;
 pub use scene_16k::{bench_render, zhang_16k_body, zhang_16k_strands, RenderBench};
 pub use shading::{kajiya_kay_diffuse, kajiya_kay_specular};
 pub use shadow::{eq1_opacity, ShadowMaps, MAPS};

@@ -74,7 +74,7 @@ fn strand(id: u32, n: [f32; 3], out: &mut Vec<[f32; 3]>) {
     let len = 0.25 + 0.15 * hash01(id);
     let step = len / SEGMENTS_PER_STRAND as f32;
     let mut dir = super::camera::scale(n, 0.6);
-    let phase = 6.283 * hash01(id ^ 0x5bd1_e995);
+    let phase = std::f32::consts::TAU * hash01(id ^ 0x5bd1_e995);
     out.push(p);
     for s in 1..=SEGMENTS_PER_STRAND {
         // Gravity pulls the direction down; a small wave across it.

@@ -184,6 +184,32 @@ pub fn send_blueprint(
     style_name: &str,
     head_center: [f32; 3],
 ) -> anyhow::Result<()> {
+    let [c0, c1, c2] = head_center;
+    let camera = BlueprintCamera {
+        eye: [c0 + EYE_OFFSET[0], c1 + EYE_OFFSET[1], c2 + EYE_OFFSET[2]],
+        target: [c0, c1 - LOOK_DROP, c2],
+    };
+    send_blueprint_with(rec, style_name, &camera, false)
+}
+
+/// Where the 3D view starts: the renderer's camera, so both halves of Figure 4 show the hair
+/// from the same place.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BlueprintCamera {
+    /// Eye position, world m.
+    pub eye: [f32; 3],
+    /// Look target, world m.
+    pub target: [f32; 3],
+}
+
+/// The default layout with the 3D view's eye at `camera`; with `render`, the rendered hair
+/// (`/render/hair`) stands beside the 3D view, Figure 4's two halves, above the plots.
+pub fn send_blueprint_with(
+    rec: &RecordingStream,
+    style_name: &str,
+    camera: &BlueprintCamera,
+    render: bool,
+) -> anyhow::Result<()> {
     let app_id = rec
         .store_info()
         .map(|info| info.application_id().clone())
@@ -214,16 +240,27 @@ pub fn send_blueprint(
     };
 
     let spatial_path = log_view(&blueprint_uuid(1), &spatial)?;
-    let [c0, c1, c2] = head_center;
-    let eye = [c0 + EYE_OFFSET[0], c1 + EYE_OFFSET[1], c2 + EYE_OFFSET[2]];
     bp.log(
         format!("{spatial_path}/EyeControls3D"),
         &EyeControls3D::new()
             .with_kind(Eye3DKind::Orbital)
-            .with_position(eye)
-            .with_look_target([c0, c1 - LOOK_DROP, c2])
+            .with_position(camera.eye)
+            .with_look_target(camera.target)
             .with_eye_up([0.0f32, 1.0, 0.0]),
     )?;
+    let render_path = format!("view/{}", uuid_string(&blueprint_uuid(13)));
+    if render {
+        bp.log(
+            format!("{render_path}/ViewContents"),
+            &ViewContents::new([QueryExpression::from("+ /render/**")]),
+        )?;
+        bp.log(
+            render_path.as_str(),
+            &ViewBlueprint::new(ViewClass::from("2D"))
+                .with_display_name(Name::from("rendered hair"))
+                .with_space_origin("/render"),
+        )?;
+    }
 
     let mut plot_paths = Vec::with_capacity(plots.len());
     for (k, v) in plots.iter().enumerate() {
@@ -239,29 +276,55 @@ pub fn send_blueprint(
             .with_contents(plot_paths.iter().map(|p| IncludedContent::from(p.as_str())))
             .with_grid_columns(PLOT_COLUMNS),
     )?;
-    let right_paths = [grid_path, log_path];
-    let vertical = blueprint_uuid(10);
-    let vertical_path = format!("container/{}", uuid_string(&vertical));
-    bp.log(
-        vertical_path.as_str(),
-        &ContainerBlueprint::new(ContainerKind::Vertical)
-            .with_contents(
-                right_paths
-                    .iter()
-                    .map(|p| IncludedContent::from(p.as_str())),
-            )
-            .with_row_shares(ROW_SHARES.map(RowShare::from)),
-    )?;
-    let root = blueprint_uuid(11);
-    bp.log(
-        format!("container/{}", uuid_string(&root)),
-        &ContainerBlueprint::new(ContainerKind::Horizontal)
-            .with_contents([
-                IncludedContent::from(spatial_path.as_str()),
-                IncludedContent::from(vertical_path.as_str()),
-            ])
-            .with_col_shares(COLUMN_SHARES.map(ColumnShare::from)),
-    )?;
+    let container =
+        |k: u8, kind, contents: [&str; 2], shares: [f32; 2]| -> anyhow::Result<String> {
+            let path = format!("container/{}", uuid_string(&blueprint_uuid(k)));
+            let mut c =
+                ContainerBlueprint::new(kind).with_contents(contents.map(IncludedContent::from));
+            c = if kind == ContainerKind::Vertical {
+                c.with_row_shares(shares.map(RowShare::from))
+            } else {
+                c.with_col_shares(shares.map(ColumnShare::from))
+            };
+            bp.log(path.as_str(), &c)?;
+            Ok(path)
+        };
+    let root_id = 11;
+    if render {
+        // Figure 4: the AWT beside the rendered hair; the plots and the log below.
+        let top = container(
+            14,
+            ContainerKind::Horizontal,
+            [&spatial_path, &render_path],
+            [1.0, 1.0],
+        )?;
+        let bottom = container(
+            15,
+            ContainerKind::Horizontal,
+            [&grid_path, &log_path],
+            [3.0, 2.0],
+        )?;
+        container(
+            root_id,
+            ContainerKind::Vertical,
+            [&top, &bottom],
+            [3.0, 2.0],
+        )?;
+    } else {
+        let right = container(
+            10,
+            ContainerKind::Vertical,
+            [&grid_path, &log_path],
+            ROW_SHARES,
+        )?;
+        container(
+            root_id,
+            ContainerKind::Horizontal,
+            [&spatial_path, &right],
+            COLUMN_SHARES,
+        )?;
+    }
+    let root = blueprint_uuid(root_id);
     bp.log(
         "viewport",
         &ViewportBlueprint::new()

@@ -24,7 +24,8 @@ pub mod paths;
 pub mod sink;
 
 pub use blueprint::{
-    blueprint, runs_blueprint, send_blueprint, send_runs_blueprint, spatial_view_blueprint_path,
+    blueprint, runs_blueprint, send_blueprint, send_blueprint_with, send_runs_blueprint,
+    spatial_view_blueprint_path, BlueprintCamera,
 };
 pub use colors::level_color;
 use colors::*;
@@ -129,6 +130,10 @@ pub struct LoggerSetup {
     pub prefix: String,
     /// Send the default blueprint (a multi-run recording sends its own once).
     pub send_blueprint: bool,
+    /// The 3D view's starting eye and target; `None`: in front of and beside `camera_target`.
+    pub camera: Option<BlueprintCamera>,
+    /// The recording has rendered frames at `/render/hair`: show them beside the 3D view.
+    pub render: bool,
 }
 
 impl LoggerSetup {
@@ -140,6 +145,8 @@ impl LoggerSetup {
             camera_target,
             prefix: String::new(),
             send_blueprint: true,
+            camera: None,
+            render: false,
         }
     }
 }
@@ -185,7 +192,10 @@ impl Logger {
         )
         .context("logging the annotation context")?;
         if setup.send_blueprint {
-            send_blueprint(&rec, &setup.style_name, setup.camera_target)?;
+            match &setup.camera {
+                Some(c) => send_blueprint_with(&rec, &setup.style_name, c, setup.render)?,
+                None => send_blueprint(&rec, &setup.style_name, setup.camera_target)?,
+            }
         }
         log_series_styles(&rec, &setup.prefix, levels)?;
 
@@ -234,6 +244,14 @@ impl Logger {
         self.log_body(frame)?;
         self.log_events(frame)?;
         self.log_stats(frame)?;
+        if let Some(img) = &frame.image {
+            let path = self.paths.named(paths::RENDER).clone();
+            self.rec.log(
+                path,
+                &rerun::EncodedImage::from_file_contents(img.jpeg.clone())
+                    .with_media_type(rerun::components::MediaType::JPEG),
+            )?;
+        }
         for m in &frame.messages {
             self.rec
                 .log(self.paths.log.clone(), &TextLog::new(m.as_str()))?;

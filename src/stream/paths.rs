@@ -20,6 +20,8 @@ pub const SCALP: &str = "/head/scalp";
 pub const SPLITS: &str = "/events/split";
 /// Merge events.
 pub const MERGES: &str = "/events/merge";
+/// The rendered hair (an encoded JPEG per rendered frame).
+pub const RENDER: &str = "/render/hair";
 /// Free-text messages.
 pub const LOG: &str = "/log";
 /// Per-level counts live below this: `/stats/active_nodes/level_N`.

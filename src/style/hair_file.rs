@@ -279,7 +279,7 @@ fn read_points(
     strands: usize,
     points: usize,
 ) -> Result<Vec<Vec<[f32; 3]>>, String> {
-    let per = if strands == 0 { 0 } else { points / strands };
+    let per = points.checked_div(strands).unwrap_or(0);
     let mut out = Vec::with_capacity(strands);
     let mut chunks = data.chunks_exact(12).enumerate();
     for s in 0..strands {

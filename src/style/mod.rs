@@ -9,12 +9,14 @@ pub mod generate;
 pub mod hair_file;
 pub mod hairsalon;
 pub mod import;
+pub mod render_params;
 pub mod schema;
 pub mod tfx;
 pub mod tfx_write;
 
 use std::path::{Path, PathBuf};
 
+pub use render_params::RenderParams;
 pub use schema::*;
 
 /// Anything wrong with a style or the files it refers to. Every message names the file, the

@@ -40,9 +40,9 @@ pub struct Style {
     #[serde(default)]
     pub layered: crate::solver::layered::LayeredParams,
     /// How the hair is rendered (shading, shadows, antialiasing). Default:
-    /// [`crate::render::RenderParams::default`].
+    /// [`RenderParams::default`](super::RenderParams).
     #[serde(default)]
-    pub render: crate::render::RenderParams,
+    pub render: super::RenderParams,
 }
 
 fn default_seed() -> u64 {

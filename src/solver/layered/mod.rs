@@ -257,8 +257,8 @@ impl Solver for LayeredSolver {
         // 1. Forces.
         forces::accumulate_forces(w, &self.coeffs);
         // 2. Detection (at the interaction rate).
-        let interact = lp.interactions && self.steps % self.interaction_every == 0;
-        let body_step = self.steps % self.body_every == 0;
+        let interact = lp.interactions && self.steps.is_multiple_of(self.interaction_every);
+        let body_step = self.steps.is_multiple_of(self.body_every);
         if interact {
             self.detector.detect(w);
         }
