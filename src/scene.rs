@@ -78,6 +78,12 @@ impl Scene {
     pub fn solver_with(&self, params: &SimParams) -> Box<dyn Solver> {
         match self.solver {
             SolverKind::Awt | SolverKind::SingleLevel => Box::new(self.awt_with(params)),
+            SolverKind::Guides => Box::new(crate::solver::guides::GuideSolver::new(
+                self.model.clone(),
+                self.motion.clone(),
+                params.clone(),
+                self.loaded.style.guides.clone(),
+            )),
         }
     }
 

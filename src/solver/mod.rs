@@ -12,6 +12,9 @@
 //! |---|---|---|
 //! | `awt` | Bertails, Kim, Cani, Neumann 2003, *Adaptive Wisp Tree* | [`crate::sim`] |
 //! | `single-level` | the same, every finest node active, no adaptation (its §5.2) | [`crate::sim`] |
+//! | `guides` | Chang, Jin, Yu 2002, *A practical model for hair mutual interactions* | [`guides`] |
+
+pub mod guides;
 
 use std::sync::Arc;
 
@@ -32,17 +35,22 @@ pub enum SolverKind {
     /// The AWT with every finest node active and no adaptation (the AWT paper's §5.2
     /// comparison).
     SingleLevel,
+    /// Guide strands as multibody chains with static links and triangle strips (Chang, Jin,
+    /// Yu 2002).
+    Guides,
 }
 
 impl SolverKind {
     /// Every solver, in the order `--help` lists them.
-    pub const ALL: &'static [SolverKind] = &[SolverKind::Awt, SolverKind::SingleLevel];
+    pub const ALL: &'static [SolverKind] =
+        &[SolverKind::Awt, SolverKind::SingleLevel, SolverKind::Guides];
 
     /// The name on the command line and in the bench's JSON.
     pub fn name(self) -> &'static str {
         match self {
             SolverKind::Awt => "awt",
             SolverKind::SingleLevel => "single-level",
+            SolverKind::Guides => "guides",
         }
     }
 
@@ -51,6 +59,7 @@ impl SolverKind {
     pub fn path_segment(self) -> &'static str {
         match self {
             SolverKind::Awt | SolverKind::SingleLevel => "awt",
+            SolverKind::Guides => "guides",
         }
     }
 
@@ -59,6 +68,9 @@ impl SolverKind {
         match self {
             SolverKind::Awt => "Adaptive Wisp Tree (Bertails et al. 2003): wisps split and merge",
             SolverKind::SingleLevel => "the AWT with every finest node active, no adaptation",
+            SolverKind::Guides => {
+                "guide strands (Chang, Jin, Yu 2002): multibody chains, static links, triangle strips"
+            }
         }
     }
 

@@ -34,6 +34,10 @@ pub struct Style {
     /// Simulation parameters. Default: [`SimParams::default`].
     #[serde(default)]
     pub sim: SimParams,
+    /// The guide-strand model's parameters (`--model guides`). Default:
+    /// [`crate::solver::guides::GuideParams::default`].
+    #[serde(default)]
+    pub guides: crate::solver::guides::GuideParams,
 }
 
 fn default_seed() -> u64 {
