@@ -21,17 +21,32 @@ use super::{GuideSolver, Origin, NO_GUIDE};
 use crate::solver::{AdaptEvent, EventKind, StepReport};
 
 impl GuideSolver {
-    /// Largest distance between corresponding vertices of guides `a` and `b`, and where.
-    pub fn farthest(&self, a: usize, b: usize) -> (f64, usize) {
+    /// Largest drift apart of corresponding vertices of guides `a` and `b` (their distance
+    /// minus the distance `d0` they had at the start), and where.
+    pub fn farthest(&self, a: usize, b: usize, d0: &[f64]) -> (f64, usize) {
         let n = self.gp.segments;
-        let mut best = (0.0, 0);
+        let mut best = (f64::NEG_INFINITY, 0);
         for i in 1..=n {
             let d = (self.chains.x[a * (n + 1) + i] - self.chains.x[b * (n + 1) + i]).norm();
-            if d > best.0 {
-                best = (d, i);
+            if d - d0[i] > best.0 {
+                best = (d - d0[i], i);
             }
         }
         best
+    }
+
+    /// Distances of corresponding vertices of every base strip pair now: the reference of
+    /// the drift (taken on the settled hair).
+    pub(super) fn record_pair_distances(&mut self) {
+        let n = self.gp.segments;
+        self.pair_d0.clear();
+        for &(a, b) in &self.base_pairs {
+            for i in 0..=n {
+                let (va, vb) = (a as usize * (n + 1) + i, b as usize * (n + 1) + i);
+                self.pair_d0
+                    .push((self.chains.x[va] - self.chains.x[vb]).norm());
+            }
+        }
     }
 
     /// Number of inserted guides alive.
@@ -39,19 +54,17 @@ impl GuideSolver {
         self.alive.iter().filter(|&&g| g >= self.initial).count()
     }
 
-    /// Checks every strip; inserts and removes guides; rebuilds strips and the dense binding if
-    /// anything changed.
+    /// Checks every strip; inserts and removes guides (each rebuilds the strips and the dense
+    /// binding).
     pub(super) fn adapt(&mut self, report: &mut StepReport) {
-        let mut changed = false;
         for p in 0..self.base_pairs.len() {
             let (a, b) = self.base_pairs[p];
-            let (d, i) = self.farthest(a as usize, b as usize);
+            let n1 = self.gp.segments + 1;
+            let (d, i) = self.farthest(a as usize, b as usize, &self.pair_d0[p * n1..(p + 1) * n1]);
             let m = self.mid[p];
             if m == NO_GUIDE {
                 if d > self.gp.insert_distance && self.inserted() < self.gp.max_inserted {
                     if let Some(slot) = self.insert_between(a as usize, b as usize) {
-                        self.mid[p] = slot as u32;
-                        changed = true;
                         report
                             .events
                             .push(self.event(EventKind::GuideInsert, slot, a, b, i, d));
@@ -62,13 +75,7 @@ impl GuideSolver {
                     .events
                     .push(self.event(EventKind::GuideRemove, m as usize, a, b, i, d));
                 self.remove(m as usize);
-                self.mid[p] = NO_GUIDE;
-                changed = true;
             }
-        }
-        if changed {
-            self.refresh_alive();
-            self.rebuild_topology();
         }
     }
 
@@ -94,19 +101,110 @@ impl GuideSolver {
     pub fn insert_between(&mut self, a: usize, b: usize) -> Option<usize> {
         let slot = (self.initial..self.chains.capacity()).find(|&g| !self.chains.alive[g])?;
         let n = self.gp.segments;
-        let half = |v: &[Vector3<f64>], i: usize| (v[a * (n + 1) + i] + v[b * (n + 1) + i]) * 0.5;
-        let rest: Vec<Vector3<f64>> = (0..=n).map(|i| half(&self.rest_x, i)).collect();
-        let pts: Vec<Vector3<f64>> = (0..=n).map(|i| half(&self.chains.x, i)).collect();
-        let vel: Vec<Vector3<f64>> = (0..=n).map(|i| half(&self.chains.v, i)).collect();
+        let rest = blend_polyline(&self.rest_x, a, b, n);
+        let pts = blend_polyline(&self.chains.x, a, b, n);
+        let vel: Vec<Vector3<f64>> = (0..=n)
+            .map(|i| (self.chains.v[a * (n + 1) + i] + self.chains.v[b * (n + 1) + i]) * 0.5)
+            .collect();
+        // The mean of two roots lies under the scalp's curve: lift it (and the rest shape) out of
+        // the body, so the new root does not start inside the head sphere.
+        let mut rest = rest;
+        let lift = self.out_of_body(&rest[0]) - rest[0];
+        for p in &mut rest {
+            *p += lift;
+        }
         self.init_slot(slot, &rest);
         self.origin[slot] = Origin::Inserted(a as u32, b as u32);
+        // Two neighbours on either side of the neck or a shoulder have their mean inside the
+        // body: start the new guide outside it (§3.3's correction, without friction), or the
+        // first sub-step's push-out becomes a whip.
+        let mut pts = pts;
+        let start = pts.clone();
+        let pose = self.pose;
+        self.posed_spheres(&pose);
+        let lens = self.chains.len[slot * n..(slot + 1) * n].to_vec();
+        let root = pose
+            .transform_point(&nalgebra::Point3::from(self.chains.root_rest[slot]))
+            .coords;
+        let shift = root - pts[0];
+        for p in &mut pts {
+            *p += shift;
+        }
+        let mut vel = vel;
+        super::body::correct(
+            &mut pts,
+            &mut vel,
+            &start,
+            &lens,
+            &self.spheres,
+            self.gp.body_margin,
+            0.0,
+            self.params.dt,
+        );
         self.set_guide_state(slot, &pts, &vel);
+        if let Some(p) = self
+            .base_pairs
+            .iter()
+            .position(|&(x, y)| (x as usize, y as usize) == (a, b))
+        {
+            self.mid[p] = slot as u32;
+        }
+        self.refresh_alive();
+        self.rebuild_topology();
         Some(slot)
     }
 
-    /// Removes inserted guide `g`.
+    /// `p` (rest pose) moved out of every body sphere it is inside, along the sphere's normal,
+    /// to the surface plus the body margin.
+    fn out_of_body(&self, p: &Vector3<f64>) -> Vector3<f64> {
+        let mut p = *p;
+        for sp in &self.model.body {
+            let c = Vector3::from(sp.center);
+            let d = p - c;
+            let r = sp.radius + self.gp.body_margin;
+            if d.norm() < r {
+                p = c + d.try_normalize(1e-12).unwrap_or_else(Vector3::y) * r;
+            }
+        }
+        p
+    }
+
+    /// The strip pairs between initial guides (where guides may be inserted).
+    pub fn base_pairs(&self) -> &[(u32, u32)] {
+        &self.base_pairs
+    }
+
+    /// Removes inserted guide `g` (its strips become one again).
     pub fn remove(&mut self, g: usize) {
         self.chains.alive[g] = false;
         self.origin[g] = Origin::Free;
+        for m in &mut self.mid {
+            if *m == g as u32 {
+                *m = NO_GUIDE;
+            }
+        }
+        self.refresh_alive();
+        self.rebuild_topology();
     }
+}
+
+/// The polyline halfway between guides `a` and `b` of `x` (per vertex, `n + 1` per guide):
+/// root at the midpoint of the roots, each segment along the mean of the two segment
+/// directions with the mean length. Halving the positions instead would shrink the segments
+/// of two guides that leave a parting in opposite directions to nothing.
+fn blend_polyline(x: &[Vector3<f64>], a: usize, b: usize, n: usize) -> Vec<Vector3<f64>> {
+    let (va, vb) = (a * (n + 1), b * (n + 1));
+    let mut out = Vec::with_capacity(n + 1);
+    out.push((x[va] + x[vb]) * 0.5);
+    for i in 0..n {
+        let da = x[va + i + 1] - x[va + i];
+        let db = x[vb + i + 1] - x[vb + i];
+        let len = 0.5 * (da.norm() + db.norm());
+        let ua = da.try_normalize(1e-12).unwrap_or_else(Vector3::y);
+        let ub = db.try_normalize(1e-12).unwrap_or(ua);
+        let dir = (ua + ub).try_normalize(1e-6).unwrap_or(ua);
+        let next = out[i] + dir * len;
+        out.push(next);
+    }
+    out
 }

@@ -4,11 +4,12 @@
 //! corrected by iterative local displacements: starting from the first penetrating vertex,
 //! each vertex is moved by its predecessor's displacement, put back at its segment length from
 //! it, and pushed out to the surface if it is still inside, so the tip outside is disturbed as
-//! little as possible. A vertex pushed out has its motion relative to the body along the
-//! normal removed (it takes the body's normal velocity and cannot move into it) and part of its
-//! tangential motion removed (friction); it stays free to leave. The corrected positions become
-//! joint angles again, and the joint rates are the angle change over the sub-step, so the
-//! velocities follow the corrected motion.
+//! little as possible. A vertex pushed out takes the body's normal velocity if it was moving
+//! into it (it cannot accelerate into the body), keeps an outward one (it may leave), and loses
+//! part of its tangential velocity relative to the body (friction). The corrected positions
+//! become joint angles again by the chain's inverse kinematics, and the corrected velocities
+//! become joint rates through the same map (the angles of the positions advanced by a tiny
+//! time, differenced).
 
 use nalgebra::Vector3;
 
@@ -45,11 +46,16 @@ pub fn inside(spheres: &[PosedSphere], x: &Vector3<f64>, margin: f64) -> Option<
     best.map(|(_, k)| k)
 }
 
-/// Corrects one guide's vertices `x` (root first, `lens[i]` the length of segment `i`) in
-/// place. `start`: the vertices at the beginning of the sub-step, `h` its length. Returns the
-/// number of vertices pushed out (0: nothing changed).
+/// Corrects one guide's vertices `x` (root first, `lens[i]` the length of segment `i`) and
+/// their velocities `v` in place. `start`: the vertices at the beginning of the sub-step, `h`
+/// its length. A pushed-out vertex keeps its velocity relative to the body only where it
+/// leaves the body (the normal part, if outwards) and loses the fraction `friction` of its
+/// tangential part; the push itself is not turned into velocity (a vertex resting inside the
+/// margin would otherwise be shot out). Returns the number of vertices pushed out.
+#[allow(clippy::too_many_arguments)]
 pub fn correct(
     x: &mut [Vector3<f64>],
+    v: &mut [Vector3<f64>],
     start: &[Vector3<f64>],
     lens: &[f64],
     spheres: &[PosedSphere],
@@ -60,6 +66,7 @@ pub fn correct(
     let Some(first) = (1..x.len()).find(|&i| inside(spheres, &x[i], margin).is_some()) else {
         return 0;
     };
+    let _ = (start, h);
     let mut pushed = 0;
     let mut shift = Vector3::zeros();
     for i in first..x.len() {
@@ -74,10 +81,11 @@ pub fn correct(
                 .try_normalize(1e-12)
                 .unwrap_or_else(Vector3::y);
             p = s.center + nrm * (s.radius + margin);
-            // Friction: remove part of the tangential motion relative to the body.
-            let rel = p - start[i] - s.velocity_at(&p) * h;
-            let tangential = rel - nrm * rel.dot(&nrm);
-            p -= tangential * friction;
+            let vb = s.velocity_at(&p);
+            let rel = v[i] - vb;
+            let vn = rel.dot(&nrm);
+            let vt = rel - nrm * vn;
+            v[i] = vb + nrm * vn.max(0.0) + vt * (1.0 - friction);
             pushed += 1;
         }
         shift = p - x[i];

@@ -301,12 +301,16 @@ impl Chains {
             let vs = self.vs[l];
             let fe = self.f[v0 + i + 1];
             sc.pa[i] = cross_force(&vs, &(sc.ia[i] * vs)) - six(c.cross(&fe), fe);
-            sc.tau[i] = -self.q[l] * self.k[l] - self.qd[l] * self.c[l];
+            // The actuators are integrated implicitly (their torque at the end of the step):
+            // τ = −k(q + h q̇ + h² q̈) − c(q̇ + h q̈). The q̈ terms move into the joint-space
+            // inertia below, so stiff actuators stay stable at any step.
+            sc.tau[i] = -(self.q[l] + self.qd[l] * h) * self.k[l] - self.qd[l] * self.c[l];
         }
         for i in (0..n).rev() {
             let s = sc.s[i];
             let u = sc.ia[i] * s;
-            let d = s.transpose() * u;
+            let d = s.transpose() * u
+                + Matrix2::identity() * (h * h * self.k[g * n + i] + h * self.c[g * n + i]);
             let dinv = d.try_inverse().unwrap_or_else(Matrix2::zeros);
             let uu = sc.tau[i] - s.transpose() * sc.pa[i];
             sc.u[i] = u;

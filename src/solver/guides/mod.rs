@@ -31,6 +31,9 @@ use links::Links;
 pub use params::{GuideParams, StripLayout};
 use strips::Strips;
 
+/// Time offset that turns corrected vertex velocities into joint rates, s.
+const EPS: f64 = 1e-5;
+
 /// Marks "no guide".
 pub const NO_GUIDE: u32 = u32::MAX;
 
@@ -66,6 +69,8 @@ pub struct GuideSolver {
     /// Strip pairs between initial guides, and the guide inserted in each (or `NO_GUIDE`).
     base_pairs: Vec<(u32, u32)>,
     mid: Vec<u32>,
+    /// Per base pair × vertex: the distance of corresponding vertices on the settled hair.
+    pair_d0: Vec<f64>,
     /// The triangle strips in force.
     pub strips: Strips,
     /// The static links.
@@ -82,6 +87,8 @@ pub struct GuideSolver {
     buf: Vec<Vector3<f64>>,
     qbuf: Vec<Vector2<f64>>,
     qold: Vec<Vector2<f64>>,
+    qeps: Vec<Vector2<f64>>,
+    vbuf: Vec<Vector3<f64>>,
     disp: Vec<Vector3<f64>>,
     last_contacts: usize,
     last_body: usize,
@@ -162,6 +169,7 @@ impl GuideSolver {
             gframe: vec![Matrix3::identity(); cap],
             base_pairs: Vec::new(),
             mid: Vec::new(),
+            pair_d0: Vec::new(),
             strips: Strips::default(),
             links: Links::default(),
             dense: Dense::new(&model, gp.blend),
@@ -175,6 +183,8 @@ impl GuideSolver {
             buf: vec![Vector3::zeros(); n + 1],
             qbuf: vec![Vector2::zeros(); n],
             qold: vec![Vector2::zeros(); n],
+            qeps: vec![Vector2::zeros(); n],
+            vbuf: vec![Vector3::zeros(); n + 1],
             disp: vec![Vector3::zeros(); cap * (n + 1)],
             last_contacts: 0,
             last_body: 0,
@@ -324,6 +334,7 @@ impl GuideSolver {
             self.gp.link_radius,
             self.gp.link_reference,
         );
+        self.record_pair_distances();
     }
 
     /// The guide-strand parameters in force.
@@ -373,6 +384,17 @@ impl GuideSolver {
         } else {
             self.motion.pose(t)
         };
+        let rot_eps = if self.settling {
+            base1.rot
+        } else {
+            *self
+                .motion
+                .pose(t + h + EPS)
+                .iso
+                .rotation
+                .to_rotation_matrix()
+                .matrix()
+        };
         self.posed_spheres(&pose1);
         let n = self.gp.segments;
         let drag = self.params.air_drag;
@@ -411,9 +433,11 @@ impl GuideSolver {
             self.chains.fk(g, &base0, &root0);
             self.chains.integrate(g, &base0, h);
             self.chains.fk(g, &base1, &root1);
-            self.buf.copy_from_slice(&self.chains.x[vr]);
+            self.buf.copy_from_slice(&self.chains.x[vr.clone()]);
+            self.vbuf.copy_from_slice(&self.chains.v[vr]);
             let p = body::correct(
                 &mut self.buf,
+                &mut self.vbuf,
                 &self.start,
                 &self.chains.len[g * n..(g + 1) * n],
                 &self.spheres,
@@ -425,10 +449,16 @@ impl GuideSolver {
                 pushed += p;
                 self.chains
                     .angles_from(g, &base1.rot, &self.buf, &mut self.qbuf);
+                for i in 0..=n {
+                    self.buf[i] += self.vbuf[i] * EPS;
+                }
+                self.chains
+                    .angles_from(g, &rot_eps, &self.buf, &mut self.qeps);
                 for i in 0..n {
                     let dq = (self.qbuf[i] - self.qold[i]).map(chain::wrap);
                     self.chains.q[g * n + i] = self.qold[i] + dq;
-                    self.chains.qd[g * n + i] = dq / h;
+                    self.chains.qd[g * n + i] =
+                        (self.qeps[i] - self.qbuf[i]).map(chain::wrap) / EPS;
                 }
                 self.chains.fk(g, &base1, &root1);
             }
@@ -455,6 +485,15 @@ impl GuideSolver {
                 out.push(inv.transform_point(&Point3::from(self.chains.x[v])).coords);
             }
         }
+    }
+
+    /// Moves time and pose to `t` without simulating (the guides keep their joint state, so
+    /// they move with the head). For tests and experiments that place the hair by hand.
+    pub fn place(&mut self, t: f64) {
+        self.time = t;
+        self.pose = self.motion.pose(t);
+        let (base, _) = self.base_at(t, self.params.dt);
+        self.fk_all(&base, t);
     }
 
     /// Puts guide `g` in the configuration `pts` (`n + 1` world points, root first, directions

@@ -98,11 +98,12 @@ pub struct GuideParams {
     #[serde(default = "d_max_inserted")]
     pub max_inserted: usize,
     /// A guide is inserted between two strip neighbours when a pair of corresponding vertices
-    /// is farther apart than this, m. Default 0.12.
+    /// has drifted this much farther apart than on the settled hair, m. Default 0.12.
     #[serde(default = "d_insert_distance")]
     pub insert_distance: f64,
-    /// An inserted guide is removed when every pair of corresponding vertices of its two
-    /// neighbours is closer than this, m. Default 0.06.
+    /// An inserted guide is removed when no pair of corresponding vertices of its two
+    /// neighbours has drifted more than this apart (compared with the settled hair), m.
+    /// Default 0.06.
     #[serde(default = "d_remove_distance")]
     pub remove_distance: f64,
     /// Guides blended per dense strand (§5.1). Default 3.

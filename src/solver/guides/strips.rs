@@ -104,6 +104,11 @@ pub struct Strips {
 
 const BIAS: i64 = 1 << 20;
 
+/// Pairs more aligned than this orientation factor (about 11°) are not candidates: their
+/// repulsion would be almost zero (Eq. 3), and hair lying along hair is what the strips'
+/// interpolation already stands for. This keeps the contact count to the crossings.
+const MIN_CROSSING: f64 = 0.2;
+
 fn cell_key(c: [i64; 3]) -> u64 {
     let m = (1u64 << 21) - 1;
     (((c[0] + BIAS) as u64 & m) << 42)
@@ -238,6 +243,11 @@ impl Strips {
                     {
                         continue;
                     }
+                    let ta = chains.x[va + 1] - chains.x[va];
+                    let tb = chains.x[vb + 1] - chains.x[vb];
+                    if orientation_scale(&(ta / ta.norm()), &(tb / tb.norm())) < MIN_CROSSING {
+                        continue;
+                    }
                     self.candidates.push(Candidate {
                         tri: false,
                         a: la.min(lb) as u32,
@@ -264,7 +274,14 @@ impl Strips {
                     }
                     let (c, _) =
                         closest_on_triangle(&chains.x[v], &tv.map(|w| chains.x[w as usize]));
-                    if (c - chains.x[v]).norm() < reach {
+                    let mut dir = Vector3::zeros();
+                    for w in tv {
+                        dir += tangent(chains, w as usize);
+                    }
+                    let dir = dir.try_normalize(1e-12).unwrap_or_else(Vector3::y);
+                    if (c - chains.x[v]).norm() < reach
+                        && orientation_scale(&tangent(chains, v), &dir) >= MIN_CROSSING
+                    {
                         self.candidates.push(Candidate {
                             tri: true,
                             a: v as u32,
