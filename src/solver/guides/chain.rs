@@ -19,6 +19,9 @@
 
 use nalgebra::{Matrix2, Matrix3, Matrix6, Matrix6x2, Vector2, Vector3, Vector6};
 
+/// Default largest joint rate, rad/s (about 10 turns per second).
+pub const MAX_RATE: f64 = 60.0;
+
 /// The motion of the body a chain's root is fixed to (the head), in spatial coordinates.
 #[derive(Debug, Clone, Copy)]
 pub struct Base {
@@ -66,6 +69,9 @@ pub struct Chains {
     pub v: Vec<Vector3<f64>>,
     /// Per vertex: external force on it this sub-step, N (the root's is ignored).
     pub f: Vec<Vector3<f64>>,
+    /// Largest joint rate, rad/s ([`MAX_RATE`] unless changed): a safety limit, see
+    /// [`Chains::integrate`].
+    pub max_rate: f64,
     scratch: Scratch,
 }
 
@@ -167,6 +173,7 @@ impl Chains {
         let verts = (n + 1) * capacity;
         let mut c = Chains {
             n,
+            max_rate: MAX_RATE,
             ..Default::default()
         };
         c.root_rest.resize(capacity, Vector3::zeros());
@@ -289,7 +296,10 @@ impl Chains {
 
     /// Joint accelerations of guide `g` by the articulated-body algorithm (three passes, linear
     /// time), then one semi-implicit Euler step of length `h`. Uses the kinematics of the last
-    /// [`Chains::fk`] of this guide and its vertex forces `f`.
+    /// [`Chains::fk`] of this guide and its vertex forces `f`. Joint rates are limited to
+    /// `max_rate`: with the few-segment guides and the explicit contact forces, a guide whipped
+    /// by a fast head motion can otherwise gain energy without bound (a known limitation: the
+    /// limit keeps the paper styles stable under every motion).
     pub fn integrate(&mut self, g: usize, base: &Base, h: f64) {
         let n = self.n;
         let v0 = g * (n + 1);
@@ -330,6 +340,13 @@ impl Chains {
             let qdd = sc.dinv[i] * (sc.tau[i] - sc.u[i].transpose() * ap);
             a = ap + sc.s[i] * qdd;
             self.qd[l] += qdd * h;
+            // Safety limit on joint rates. Near b = ±π/2 the first axis lies along the segment
+            // and only the small rotational inertia resists it, so a fast head motion can spin
+            // a joint up; the rates of real hair stay far below this.
+            let r = self.qd[l].norm();
+            if r > self.max_rate {
+                self.qd[l] *= self.max_rate / r;
+            }
             self.q[l] += self.qd[l] * h;
         }
     }
@@ -337,7 +354,8 @@ impl Chains {
     /// Joint angles of guide `g` that put its segments along `pts` (`n + 1` points, root
     /// first; only directions are used, lengths stay the chain's). The inverse of the forward
     /// kinematics for the twist-free parametrization: `b = −asin dₓ`, `a = atan2(d_z, d_y)` with
-    /// `d` the segment direction in the frame `parent · R₀`.
+    /// `d` the segment direction in the frame `parent · R₀`, on the branch (and turn) nearest
+    /// the chain's current angles.
     pub fn angles_from(
         &self,
         g: usize,
@@ -354,6 +372,21 @@ impl Chains {
             let d = ax.transpose() * (d / d.norm().max(1e-12));
             let b = (-d.x).clamp(-1.0, 1.0).asin();
             let a = d.z.atan2(d.y);
+            // (a, b) and (a + π, π − b) give the same direction but frames half a turn apart:
+            // keep the branch nearest the chain's current angles, so a correction never swaps
+            // it (that would twist everything below by π).
+            let cur = self.q[l];
+            let near = |x: f64, r: f64| r + wrap(x - r);
+            let p1 = Vector2::new(near(a, cur.x), near(b, cur.y));
+            let p2 = Vector2::new(
+                near(a + std::f64::consts::PI, cur.x),
+                near(std::f64::consts::PI - b, cur.y),
+            );
+            let (a, b) = if (p2 - cur).norm_squared() < (p1 - cur).norm_squared() {
+                (p2.x, p2.y)
+            } else {
+                (p1.x, p1.y)
+            };
             out[i] = Vector2::new(a, b);
             parent = ax * rx(a) * rz(b);
         }

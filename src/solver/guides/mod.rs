@@ -193,8 +193,35 @@ impl GuideSolver {
             params,
             gp,
         };
+        let rest_spheres: Vec<PosedSphere> = s
+            .model
+            .body
+            .iter()
+            .map(|sp| PosedSphere {
+                center: Vector3::from(sp.center),
+                radius: sp.radius,
+                velocity: Vector3::zeros(),
+                spin: Vector3::zeros(),
+            })
+            .collect();
         for (slot, &st) in picks.iter().enumerate() {
-            let rest = resample(&s.model.strands.rest[st * k..(st + 1) * k], n + 1);
+            let mut rest = resample(&s.model.strands.rest[st * k..(st + 1) * k], n + 1);
+            // A styled shape that dips into the body (curls hugging the scalp) would have the
+            // actuators pull it into the body at every step against the §3.3 correction: the
+            // rest shape is corrected out of the body once, as the correction would do.
+            let start = rest.clone();
+            let lens: Vec<f64> = rest.windows(2).map(|w| (w[1] - w[0]).norm()).collect();
+            let mut vel = vec![Vector3::zeros(); n + 1];
+            body::correct(
+                &mut rest,
+                &mut vel,
+                &start,
+                &lens,
+                &rest_spheres,
+                s.gp.body_margin,
+                0.0,
+                1.0,
+            );
             s.origin[slot] = Origin::Strand(st as u32);
             s.init_slot(slot, &rest);
         }
@@ -455,10 +482,8 @@ impl GuideSolver {
                 self.chains
                     .angles_from(g, &rot_eps, &self.buf, &mut self.qeps);
                 for i in 0..n {
-                    let dq = (self.qbuf[i] - self.qold[i]).map(chain::wrap);
-                    self.chains.q[g * n + i] = self.qold[i] + dq;
-                    self.chains.qd[g * n + i] =
-                        (self.qeps[i] - self.qbuf[i]).map(chain::wrap) / EPS;
+                    self.chains.q[g * n + i] = self.qbuf[i];
+                    self.chains.qd[g * n + i] = (self.qeps[i] - self.qbuf[i]) / EPS;
                 }
                 self.chains.fk(g, &base1, &root1);
             }
