@@ -119,7 +119,6 @@ impl GuideSolver {
         // body: start the new guide outside it (§3.3's correction, without friction), or the
         // first sub-step's push-out becomes a whip.
         let mut pts = pts;
-        let start = pts.clone();
         let pose = self.pose;
         self.posed_spheres(&pose);
         let lens = self.chains.len[slot * n..(slot + 1) * n].to_vec();
@@ -134,12 +133,10 @@ impl GuideSolver {
         super::body::correct(
             &mut pts,
             &mut vel,
-            &start,
             &lens,
             &self.spheres,
             self.gp.body_margin,
             0.0,
-            self.params.dt,
         );
         self.set_guide_state(slot, &pts, &vel);
         if let Some(p) = self

@@ -47,26 +47,21 @@ pub fn inside(spheres: &[PosedSphere], x: &Vector3<f64>, margin: f64) -> Option<
 }
 
 /// Corrects one guide's vertices `x` (root first, `lens[i]` the length of segment `i`) and
-/// their velocities `v` in place. `start`: the vertices at the beginning of the sub-step, `h`
-/// its length. A pushed-out vertex keeps its velocity relative to the body only where it
+/// their velocities `v` in place. A pushed-out vertex keeps its velocity relative to the body only where it
 /// leaves the body (the normal part, if outwards) and loses the fraction `friction` of its
 /// tangential part; the push itself is not turned into velocity (a vertex resting inside the
 /// margin would otherwise be shot out). Returns the number of vertices pushed out.
-#[allow(clippy::too_many_arguments)]
 pub fn correct(
     x: &mut [Vector3<f64>],
     v: &mut [Vector3<f64>],
-    start: &[Vector3<f64>],
     lens: &[f64],
     spheres: &[PosedSphere],
     margin: f64,
     friction: f64,
-    h: f64,
 ) -> usize {
     let Some(first) = (1..x.len()).find(|&i| inside(spheres, &x[i], margin).is_some()) else {
         return 0;
     };
-    let _ = (start, h);
     let mut pushed = 0;
     let mut shift = Vector3::zeros();
     for i in first..x.len() {
