@@ -565,3 +565,24 @@ fn bad_guide_values_are_errors_naming_the_field() {
         assert!(msg.contains("x.ron") && msg.contains(field), "{msg}");
     }
 }
+
+#[test]
+fn chang_shake_links_keep_the_hairstyle() {
+    let def = wisptree::experiment::find("chang-shake").unwrap();
+    let opts = wisptree::experiment::ExperimentOptions {
+        duration_scale: 0.5,
+    };
+    let runs = (def.run)(&opts, &mut wisptree::experiment::NoFrames).unwrap();
+    let get = |label: &str, m: &str| {
+        runs.iter().find(|r| r.label == label).unwrap().metrics[m]
+            .as_f64()
+            .unwrap()
+    };
+    for r in &runs {
+        eprintln!("{} {:?}", r.label, r.metrics);
+    }
+    assert!(get("links", "shape_error_m") < get("no_links", "shape_error_m"));
+    assert!(get("links_broken", "shape_error_m") > get("links", "shape_error_m"));
+    assert!(get("links_broken", "links_broken_fraction") > get("links", "links_broken_fraction"));
+    assert_eq!(get("no_links", "links_broken_fraction"), 0.0);
+}

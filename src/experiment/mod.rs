@@ -6,6 +6,8 @@
 //! app's sink logs it to Rerun under `/runs/<label>/…`, a test's sink does nothing. Experiments
 //! never name Rerun.
 
+pub mod chang;
+
 use crate::solver::{AdaptEvent, Solver};
 
 /// Where an experiment's frames go.
@@ -76,7 +78,7 @@ pub struct ExperimentDef {
 
 /// Every experiment, in `--list` order.
 pub fn all() -> Vec<&'static ExperimentDef> {
-    Vec::new()
+    vec![&chang::CHANG_SHAKE]
 }
 
 /// The experiment called `name`.
