@@ -14,8 +14,9 @@ use std::time::{Duration, Instant};
 
 use criterion::{criterion_group, criterion_main, BatchSize, Criterion};
 use nalgebra::{Point3, Vector3};
-use wisptree::frame::{Frame, FrameBuilder};
+use wisptree::frame::Frame;
 use wisptree::motion::Motion;
+use wisptree::pipeline::FrameBuilder;
 use wisptree::solver::awt::collide::{self, BodySphere, ContactParams, HairCollider};
 use wisptree::solver::awt::{dynamics, forest as awt, Simulation, StepReport};
 use wisptree::style::Link;

@@ -8,7 +8,8 @@
 
 use std::path::Path;
 
-use wisptree::frame::{Frame, FrameBuilder};
+use wisptree::frame::Frame;
+use wisptree::pipeline::FrameBuilder;
 use wisptree::render::{
     bench_render, bounds, camera::DEFAULT_VIEW, write_png, zhang_16k_body, zhang_16k_strands,
     Camera, Image, RenderInput, RenderParams, Renderer,

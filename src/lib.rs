@@ -39,10 +39,3 @@ pub mod scene;
 pub mod solver;
 pub mod stream;
 pub mod style;
-
-/// Old paths of the AWT solver (`crate::sim::…`), kept while other branches move over.
-#[doc(hidden)]
-pub mod sim {
-    pub use crate::report;
-    pub use crate::solver::awt::*;
-}

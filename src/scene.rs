@@ -88,6 +88,12 @@ impl Scene {
                 params,
                 &self.loaded.style,
             )),
+            SolverKind::Guides => Box::new(crate::solver::guides::GuideSolver::new(
+                self.model.clone(),
+                self.motion.clone(),
+                params.clone(),
+                self.loaded.style.guides.clone(),
+            )),
         }
     }
 

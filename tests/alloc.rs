@@ -17,8 +17,9 @@ use std::path::Path;
 use std::sync::Arc;
 
 use nalgebra::Point3;
-use wisptree::frame::{Frame, FrameBuilder};
+use wisptree::frame::Frame;
 use wisptree::motion::Motion;
+use wisptree::pipeline::FrameBuilder;
 use wisptree::solver::awt::{Simulation, StepReport};
 
 struct Counting;

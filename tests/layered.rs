@@ -643,7 +643,7 @@ fn a_frame_shows_skeleton_envelope_sections_strands_and_stats() {
     for _ in 0..s.steps_per_frame() {
         s.step(&mut r);
     }
-    let mut fb = wisptree::frame::FrameBuilder::new(&scene.model, 50, 2);
+    let mut fb = wisptree::pipeline::FrameBuilder::new(&scene.model, 50, 2);
     let mut f = wisptree::frame::Frame::default();
     fb.fill(s.as_mut(), &mut f);
     assert_eq!(f.solver, "layered");

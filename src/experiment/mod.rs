@@ -7,6 +7,7 @@
 //! never name Rerun.
 
 pub mod awt_fig5;
+pub mod chang;
 pub mod plante;
 
 use crate::solver::{AdaptEvent, Solver};
@@ -85,6 +86,7 @@ pub fn all() -> Vec<&'static ExperimentDef> {
         &plante::PLANTE_FIG8,
         &plante::PLANTE_FIG9,
         &awt_fig5::AWT_FIG5,
+        &chang::CHANG_SHAKE,
     ]
 }
 

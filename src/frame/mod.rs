@@ -249,8 +249,3 @@ impl Frame {
         self.stats.iter().find(|s| s.path == path).map(|s| s.value)
     }
 }
-
-/// Old path of the frame builder (now in [`crate::pipeline`]), kept while other branches move
-/// over.
-#[doc(hidden)]
-pub use crate::pipeline::{catmull_rom, FrameBuilder};

@@ -10,10 +10,12 @@
 //!
 //! | [`SolverKind`] | paper | module |
 //! |---|---|---|
-//! | `awt` | Bertails, Kim, Cani, Neumann 2003, *Adaptive Wisp Tree* | [`crate::sim`] |
-//! | `single-level` | the same, every finest node active, no adaptation (its §5.2) | [`crate::sim`] |
+//! | `awt` | Bertails, Kim, Cani, Neumann 2003, *Adaptive Wisp Tree* | [`awt`] |
+//! | `single-level` | the same, every finest node active, no adaptation (its §5.2) | [`awt`] |
 //! | `layered` | Plante, Cani, Poulin 2002, *Capturing the Complexity of Hair Motion* | [`layered`] |
+//! | `guides` | Chang, Jin, Yu 2002, *A practical model for hair mutual interactions* | [`guides`] |
 
+pub mod guides;
 pub mod layered;
 
 use std::sync::Arc;
@@ -40,6 +42,9 @@ pub enum SolverKind {
     /// The layered wisp model (Plante, Cani, Poulin 2002): skeleton, envelope, anisotropic
     /// interactions.
     Layered,
+    /// Guide strands as multibody chains with static links and triangle strips (Chang, Jin,
+    /// Yu 2002).
+    Guides,
 }
 
 impl SolverKind {
@@ -48,6 +53,7 @@ impl SolverKind {
         SolverKind::Awt,
         SolverKind::SingleLevel,
         SolverKind::Layered,
+        SolverKind::Guides,
     ];
 
     /// The name on the command line and in the bench's JSON.
@@ -56,6 +62,7 @@ impl SolverKind {
             SolverKind::Awt => "awt",
             SolverKind::SingleLevel => "single-level",
             SolverKind::Layered => "layered",
+            SolverKind::Guides => "guides",
         }
     }
 
@@ -65,6 +72,7 @@ impl SolverKind {
         match self {
             SolverKind::Awt | SolverKind::SingleLevel => "awt",
             SolverKind::Layered => "layered",
+            SolverKind::Guides => "guides",
         }
     }
 
@@ -75,6 +83,9 @@ impl SolverKind {
             SolverKind::SingleLevel => "the AWT with every finest node active, no adaptation",
             SolverKind::Layered => {
                 "layered wisps (Plante, Cani, Poulin 2002): skeleton, envelope, anisotropic interactions"
+            }
+            SolverKind::Guides => {
+                "guide strands (Chang, Jin, Yu 2002): multibody chains, static links, triangle strips"
             }
         }
     }

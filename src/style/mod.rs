@@ -446,6 +446,7 @@ pub fn validate(style: &Style) -> Result<(), Invalid> {
     non_negative(s.wind.gust, "sim.wind.gust")?;
     non_negative(s.wind.frequency, "sim.wind.frequency")?;
     positive(s.wind.wavelength, "sim.wind.wavelength")?;
+    crate::solver::guides::params::validate(&style.guides)?;
 
     style.render.validate()?;
 

@@ -43,6 +43,10 @@ pub struct Style {
     /// [`RenderParams::default`](super::RenderParams).
     #[serde(default)]
     pub render: super::RenderParams,
+    /// The guide-strand model's parameters (`--model guides`). Default:
+    /// [`crate::solver::guides::GuideParams::default`].
+    #[serde(default)]
+    pub guides: crate::solver::guides::GuideParams,
 }
 
 fn default_seed() -> u64 {

@@ -7,7 +7,7 @@
 use nalgebra::Vector3;
 
 use super::wisp::{Wisps, ENV, MIN_RHO_FRACTION};
-use crate::sim::dynamics::damp_relative;
+use crate::solver::awt::dynamics::damp_relative;
 
 /// Mass standing for "kinematic" (the root, which the head moves) in the §5.2 mass shares.
 pub const KINEMATIC_MASS: f64 = 1e30;

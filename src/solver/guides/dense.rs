@@ -1,0 +1,141 @@
+//! Dense hair from the guides (Chang, Jin, Yu 2002, §5.1).
+//!
+//! Every strand of the model follows its nearest guides through local root frames built from
+//! the scalp normal and a global up vector (§5.1). Each guide's motion is taken into its own
+//! root frame (the paper's `M₁`), as a displacement from its rest shape there, blended over the
+//! nearest guides by inverse root distance, and carried back out through the dense strand's
+//! root frame (`M₂⁻¹`). Blending displacements rather than whole guide shapes keeps each dense
+//! strand's own styled shape (the paper merges transformed guide shapes; with a few guides per
+//! strand the two agree where the guides share a shape). Smoothing by Hermite splines is the
+//! display pipeline's Catmull-Rom spline through the returned points.
+
+use nalgebra::{Matrix3, Vector3};
+
+use crate::model::HairModel;
+
+/// The local root frame at rest-pose root `r` of a scalp ellipsoid: columns (tangent, normal,
+/// binormal) from the ellipsoid normal and the global up (y).
+pub fn root_frame(model: &HairModel, r: &Vector3<f64>) -> Matrix3<f64> {
+    let rad = model.scalp_radii;
+    let d = r - model.scalp_center;
+    let nrm = Vector3::new(
+        d.x / (rad.x * rad.x),
+        d.y / (rad.y * rad.y),
+        d.z / (rad.z * rad.z),
+    )
+    .try_normalize(1e-12)
+    .unwrap_or_else(Vector3::y);
+    let t = Vector3::y()
+        .cross(&nrm)
+        .try_normalize(1e-9)
+        .unwrap_or_else(Vector3::x);
+    let b = nrm.cross(&t);
+    Matrix3::from_columns(&[t, nrm, b])
+}
+
+/// Binding of every dense strand to its guides.
+#[derive(Debug, Clone, Default)]
+pub struct Dense {
+    /// Guides blended per strand.
+    pub blend: usize,
+    /// Per strand × blend: guide slot (`u32::MAX`: unused) and weight.
+    pub guide: Vec<u32>,
+    /// Per strand × blend: weight (they sum to 1).
+    pub weight: Vec<f64>,
+    /// Per strand point: rest position in the strand's root frame, relative to its root.
+    pub local: Vec<Vector3<f64>>,
+    /// Per strand: root frame at rest.
+    pub frame: Vec<Matrix3<f64>>,
+    /// Per strand point: current world position (after [`Dense::update`]).
+    pub points: Vec<Vector3<f64>>,
+}
+
+impl Dense {
+    /// Binds every strand of `model`, with `blend` guides each.
+    pub fn new(model: &HairModel, blend: usize) -> Dense {
+        let k = model.k;
+        let n = model.strands.len();
+        let mut d = Dense {
+            blend,
+            guide: vec![u32::MAX; n * blend],
+            weight: vec![0.0; n * blend],
+            local: Vec::with_capacity(n * k),
+            frame: Vec::with_capacity(n),
+            points: model.strands.rest.clone(),
+        };
+        for s in 0..n {
+            let root = model.strands.rest[s * k];
+            let f = root_frame(model, &root);
+            d.frame.push(f);
+            for i in 0..k {
+                d.local
+                    .push(f.transpose() * (model.strands.rest[s * k + i] - root));
+            }
+        }
+        d
+    }
+
+    /// Chooses each strand's `blend` nearest guides among `roots` (slot, rest root), weights by
+    /// inverse distance. Ties go to the lower slot, so the binding is deterministic.
+    pub fn bind(&mut self, model: &HairModel, roots: &[(usize, Vector3<f64>)]) {
+        let k = model.k;
+        let b = self.blend;
+        let mut near: Vec<(f64, usize)> = Vec::with_capacity(b + 1);
+        for s in 0..model.strands.len() {
+            let r = model.strands.rest[s * k];
+            near.clear();
+            for &(g, rg) in roots {
+                let d = (rg - r).norm();
+                if near.len() < b || (d, g) < near[near.len() - 1] {
+                    let at = near.partition_point(|e| *e < (d, g));
+                    near.insert(at, (d, g));
+                    near.truncate(b);
+                }
+            }
+            let w: Vec<f64> = near.iter().map(|(d, _)| 1.0 / (d + 1e-3)).collect();
+            let sum: f64 = w.iter().sum();
+            for j in 0..b {
+                let (g, wt) = match near.get(j) {
+                    Some(&(_, g)) => (g as u32, w[j] / sum),
+                    None => (u32::MAX, 0.0),
+                };
+                self.guide[s * b + j] = g;
+                self.weight[s * b + j] = wt;
+            }
+        }
+    }
+
+    /// Recomputes every dense point. `disp(g, u)`: guide `g`'s displacement from rest in its
+    /// root frame at fractional vertex `u ∈ [0, n]`; `rot`: the head rotation; `root(s)`: the
+    /// world root of strand `s`.
+    pub fn update(
+        &mut self,
+        model: &HairModel,
+        rot: &Matrix3<f64>,
+        root_world: impl Fn(&Vector3<f64>) -> Vector3<f64>,
+        disp: impl Fn(usize, f64) -> Vector3<f64>,
+        n: usize,
+    ) {
+        let k = model.k;
+        let b = self.blend;
+        for s in 0..model.strands.len() {
+            let root = root_world(&model.strands.rest[s * k]);
+            let f = rot * self.frame[s];
+            for i in 0..k {
+                let u = if k > 1 {
+                    i as f64 * n as f64 / (k - 1) as f64
+                } else {
+                    0.0
+                };
+                let mut dl = Vector3::zeros();
+                for j in 0..b {
+                    let g = self.guide[s * b + j];
+                    if g != u32::MAX {
+                        dl += disp(g as usize, u) * self.weight[s * b + j];
+                    }
+                }
+                self.points[s * k + i] = root + f * (self.local[s * k + i] + dl);
+            }
+        }
+    }
+}

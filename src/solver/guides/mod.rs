@@ -1,0 +1,544 @@
+//! Guide strands (Chang, Jin, Yu 2002, "A practical model for hair mutual interactions") as
+//! `--model guides`: a sparse set of guide strands, each a multibody chain in generalized
+//! coordinates ([`chain`]), held in shape by joint actuators and breakable static links
+//! ([`links`], §4.1), kept apart by triangle strips ([`strips`], §4.2), out of the body
+//! ([`body`], §3.3), with guides inserted and removed where neighbours drift apart
+//! ([`adapt`], §4.3), and every strand of the model following its nearest guides ([`dense`],
+//! §5).
+
+pub mod adapt;
+pub mod body;
+pub mod chain;
+pub mod dense;
+mod display;
+pub mod links;
+pub mod params;
+mod solve;
+pub mod strips;
+
+use std::sync::Arc;
+
+use nalgebra::{Matrix3, Point3, Vector2, Vector3, Vector6};
+
+use crate::model::HairModel;
+use crate::motion::{Motion, Pose};
+use crate::solver::Solver;
+use crate::style::SimParams;
+
+use body::PosedSphere;
+use chain::{Base, Chains};
+use dense::Dense;
+use links::Links;
+pub use params::{GuideParams, StripLayout};
+use strips::Strips;
+
+/// Time offset that turns corrected vertex velocities into joint rates, s.
+const EPS: f64 = 1e-5;
+
+/// Marks "no guide".
+pub const NO_GUIDE: u32 = u32::MAX;
+
+/// Where a guide slot's strand comes from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Origin {
+    /// An empty slot (room for adaptive guides).
+    Free,
+    /// Chosen from strand `s` of the model.
+    Strand(u32),
+    /// Inserted halfway between two guides (§4.3).
+    Inserted(u32, u32),
+}
+
+/// The guide-strand solver.
+pub struct GuideSolver {
+    model: Arc<HairModel>,
+    motion: Motion,
+    params: SimParams,
+    gp: GuideParams,
+    /// The chains of every guide slot.
+    pub chains: Chains,
+    /// Per slot: where it comes from.
+    pub origin: Vec<Origin>,
+    /// Number of slots holding the initial guides (slots `0..initial`).
+    pub initial: usize,
+    /// Per vertex: rest position in the rest pose.
+    rest_x: Vec<Vector3<f64>>,
+    /// Per vertex: rest position in its guide's root frame, relative to the root.
+    rest_local: Vec<Vector3<f64>>,
+    /// Per slot: root frame at rest.
+    gframe: Vec<Matrix3<f64>>,
+    /// Strip pairs between initial guides, and the guide inserted in each (or `NO_GUIDE`).
+    base_pairs: Vec<(u32, u32)>,
+    mid: Vec<u32>,
+    /// Per base pair × vertex: the distance of corresponding vertices on the settled hair.
+    pair_d0: Vec<f64>,
+    /// The triangle strips in force.
+    pub strips: Strips,
+    /// The static links.
+    pub links: Links,
+    dense: Dense,
+    alive: Vec<usize>,
+    time: f64,
+    pose: Pose,
+    settling: bool,
+    /// Extra spheres in world coordinates (an experiment's moving obstacle), beside the body.
+    pub obstacles: Vec<PosedSphere>,
+    spheres: Vec<PosedSphere>,
+    buf: Vec<Vector3<f64>>,
+    qbuf: Vec<Vector2<f64>>,
+    qold: Vec<Vector2<f64>>,
+    qeps: Vec<Vector2<f64>>,
+    vbuf: Vec<Vector3<f64>>,
+    disp: Vec<Vector3<f64>>,
+    last_contacts: usize,
+    last_body: usize,
+}
+
+/// The head's spatial velocity `(ω; v_O)` at the world origin.
+fn spatial_velocity(p: &Pose) -> Vector6<f64> {
+    let w = p.angular_velocity;
+    let vo = p.linear_velocity - w.cross(&p.iso.translation.vector);
+    Vector6::new(w.x, w.y, w.z, vo.x, vo.y, vo.z)
+}
+
+/// Resamples polyline `pts` to `m` points uniformly in arc length.
+pub fn resample(pts: &[Vector3<f64>], m: usize) -> Vec<Vector3<f64>> {
+    let mut cum = vec![0.0];
+    for w in pts.windows(2) {
+        cum.push(cum.last().unwrap() + (w[1] - w[0]).norm());
+    }
+    let total = *cum.last().unwrap();
+    let mut out = Vec::with_capacity(m);
+    let mut seg = 0;
+    for j in 0..m {
+        let s = total * j as f64 / (m - 1) as f64;
+        while seg + 2 < pts.len() && cum[seg + 1] < s {
+            seg += 1;
+        }
+        let span = (cum[seg + 1] - cum[seg]).max(1e-12);
+        let t = ((s - cum[seg]) / span).clamp(0.0, 1.0);
+        out.push(pts[seg].lerp(&pts[seg + 1], t));
+    }
+    out
+}
+
+/// Picks `count` strands whose roots cover the scalp uniformly: farthest-point sampling from
+/// strand 0 (deterministic; ties go to the lower index).
+pub fn pick_guides(model: &HairModel, count: usize) -> Vec<usize> {
+    let k = model.k;
+    let n = model.strands.len();
+    let count = count.min(n);
+    let root = |s: usize| model.strands.rest[s * k];
+    let mut d = vec![f64::INFINITY; n];
+    let mut out = Vec::with_capacity(count);
+    let mut cur = 0;
+    for _ in 0..count {
+        out.push(cur);
+        let r = root(cur);
+        let mut best = (f64::NEG_INFINITY, 0);
+        for s in 0..n {
+            d[s] = d[s].min((root(s) - r).norm_squared());
+            if d[s] > best.0 {
+                best = (d[s], s);
+            }
+        }
+        cur = best.1;
+    }
+    out
+}
+
+impl GuideSolver {
+    /// A solver on `model` under `motion`, settled for `params.settle` seconds.
+    pub fn new(
+        model: Arc<HairModel>,
+        motion: Motion,
+        params: SimParams,
+        gp: GuideParams,
+    ) -> GuideSolver {
+        let n = gp.segments;
+        let picks = pick_guides(&model, gp.count);
+        let initial = picks.len();
+        let cap = initial + gp.max_inserted;
+        let k = model.k;
+        let mut s = GuideSolver {
+            chains: Chains::new(n, cap),
+            origin: vec![Origin::Free; cap],
+            initial,
+            rest_x: vec![Vector3::zeros(); cap * (n + 1)],
+            rest_local: vec![Vector3::zeros(); cap * (n + 1)],
+            gframe: vec![Matrix3::identity(); cap],
+            base_pairs: Vec::new(),
+            mid: Vec::new(),
+            pair_d0: Vec::new(),
+            strips: Strips::default(),
+            links: Links::default(),
+            dense: Dense::new(&model, gp.blend),
+            alive: Vec::with_capacity(cap),
+            time: 0.0,
+            pose: motion.pose(0.0),
+            settling: false,
+            obstacles: Vec::new(),
+            spheres: Vec::new(),
+            buf: vec![Vector3::zeros(); n + 1],
+            qbuf: vec![Vector2::zeros(); n],
+            qold: vec![Vector2::zeros(); n],
+            qeps: vec![Vector2::zeros(); n],
+            vbuf: vec![Vector3::zeros(); n + 1],
+            disp: vec![Vector3::zeros(); cap * (n + 1)],
+            last_contacts: 0,
+            last_body: 0,
+            model,
+            motion,
+            params,
+            gp,
+        };
+        let rest_spheres: Vec<PosedSphere> = s
+            .model
+            .body
+            .iter()
+            .map(|sp| PosedSphere {
+                center: Vector3::from(sp.center),
+                radius: sp.radius,
+                velocity: Vector3::zeros(),
+                spin: Vector3::zeros(),
+            })
+            .collect();
+        for (slot, &st) in picks.iter().enumerate() {
+            let mut rest = resample(&s.model.strands.rest[st * k..(st + 1) * k], n + 1);
+            // A styled shape that dips into the body (curls hugging the scalp) would have the
+            // actuators pull it into the body at every step against the §3.3 correction: the
+            // rest shape is corrected out of the body once, as the correction would do.
+            let lens: Vec<f64> = rest.windows(2).map(|w| (w[1] - w[0]).norm()).collect();
+            let mut vel = vec![Vector3::zeros(); n + 1];
+            body::correct(
+                &mut rest,
+                &mut vel,
+                &lens,
+                &rest_spheres,
+                s.gp.body_margin,
+                0.0,
+            );
+            s.origin[slot] = Origin::Strand(st as u32);
+            s.init_slot(slot, &rest);
+        }
+        s.refresh_alive();
+        if s.gp.collision {
+            let roots: Vec<_> = s
+                .alive
+                .iter()
+                .map(|&g| (g, s.chains.root_rest[g]))
+                .collect();
+            s.base_pairs = strips::strip_pairs(
+                &roots,
+                s.gp.strip_layout,
+                s.gp.strip_root_distance,
+                &s.model.scalp_center,
+            );
+            s.mid = vec![NO_GUIDE; s.base_pairs.len()];
+        }
+        s.rebuild_topology();
+        s.fk_all(&s.base_at(0.0, 1e-3).0, 0.0);
+        s.settle();
+        s
+    }
+
+    /// Sets slot `g` up from its rest polyline.
+    fn init_slot(&mut self, g: usize, rest: &[Vector3<f64>]) {
+        let n = self.gp.segments;
+        let mass = self.params.total_mass / self.initial.max(1) as f64;
+        self.chains.init_guide(
+            g,
+            rest,
+            mass,
+            (
+                self.gp.stiffness,
+                self.gp.tip_stiffness,
+                self.gp.joint_damping,
+            ),
+        );
+        let f = dense::root_frame(&self.model, &rest[0]);
+        self.gframe[g] = f;
+        for (i, p) in rest.iter().enumerate() {
+            self.rest_x[g * (n + 1) + i] = *p;
+            self.rest_local[g * (n + 1) + i] = f.transpose() * (p - rest[0]);
+        }
+    }
+
+    fn refresh_alive(&mut self) {
+        self.alive.clear();
+        for g in 0..self.chains.capacity() {
+            if self.chains.alive[g] {
+                self.alive.push(g);
+            }
+        }
+    }
+
+    /// Strips from the base pairs and the inserted guides; dense binding to the alive guides.
+    fn rebuild_topology(&mut self) {
+        let mut pairs = Vec::with_capacity(self.base_pairs.len() * 2);
+        for (p, &(a, b)) in self.base_pairs.iter().enumerate() {
+            match self.mid[p] {
+                NO_GUIDE => pairs.push((a, b)),
+                m => {
+                    pairs.push((a, m));
+                    pairs.push((m, b));
+                }
+            }
+        }
+        self.strips.rebuild(
+            self.gp.segments,
+            &pairs,
+            &self.rest_x,
+            self.gp.contact_distance,
+        );
+        let roots: Vec<_> = self
+            .alive
+            .iter()
+            .map(|&g| (g, self.chains.root_rest[g]))
+            .collect();
+        self.dense.bind(&self.model, &roots);
+    }
+
+    /// The head's motion at `t` for a sub-step `h`: base of the chains (gravity folded in) and
+    /// the pose.
+    fn base_at(&self, t: f64, h: f64) -> (Base, Pose) {
+        let g = Vector3::from(self.params.gravity);
+        let (p0, p1) = if self.settling {
+            let mut p = self.motion.pose(0.0);
+            p.linear_velocity = Vector3::zeros();
+            p.angular_velocity = Vector3::zeros();
+            (p, p)
+        } else {
+            (self.motion.pose(t), self.motion.pose(t + h))
+        };
+        let v0 = spatial_velocity(&p0);
+        let acc = (spatial_velocity(&p1) - v0) / h - Vector6::new(0.0, 0.0, 0.0, g.x, g.y, g.z);
+        let base = Base {
+            rot: *p0.iso.rotation.to_rotation_matrix().matrix(),
+            vel: v0,
+            acc,
+        };
+        (base, p0)
+    }
+
+    fn fk_all(&mut self, base: &Base, _t: f64) {
+        let pose_iso = self.pose.iso;
+        for idx in 0..self.alive.len() {
+            let g = self.alive[idx];
+            let root = pose_iso
+                .transform_point(&Point3::from(self.chains.root_rest[g]))
+                .coords;
+            self.chains.fk(g, base, &root);
+        }
+    }
+
+    /// Lets the hair hang in the starting pose, then builds the static links on the settled
+    /// shape and starts at rest.
+    fn settle(&mut self) {
+        let steps = (self.params.settle / self.params.dt).round() as usize;
+        self.settling = true;
+        let mut report = self.new_report();
+        for _ in 0..steps {
+            self.step(&mut report);
+        }
+        self.settling = false;
+        self.time = 0.0;
+        self.pose = self.motion.pose(0.0);
+        for q in &mut self.chains.qd {
+            *q = Vector2::zeros();
+        }
+        let (base, _) = self.base_at(0.0, self.params.dt);
+        self.fk_all(&base, 0.0);
+        let originals: Vec<usize> = (0..self.initial).collect();
+        self.links = Links::build(
+            &self.chains,
+            &originals,
+            self.gp.links_per_segment,
+            self.gp.link_radius,
+            self.gp.link_reference,
+        );
+        self.record_pair_distances();
+    }
+
+    /// The guide-strand parameters in force.
+    pub fn guide_params(&self) -> &GuideParams {
+        &self.gp
+    }
+
+    /// Slots of the guides simulated now.
+    pub fn alive(&self) -> &[usize] {
+        &self.alive
+    }
+
+    /// Sum of the guides' energies (kinetic, gravitational, actuators), J.
+    pub fn energy(&self) -> f64 {
+        let g = Vector3::from(self.params.gravity);
+        self.alive.iter().map(|&s| self.chains.energy(s, &g)).sum()
+    }
+
+    /// Rest-pose polyline of slot `g` (as styled).
+    pub fn rest_polyline(&self, g: usize) -> &[Vector3<f64>] {
+        let n = self.gp.segments;
+        &self.rest_x[g * (n + 1)..(g + 1) * (n + 1)]
+    }
+
+    fn posed_spheres(&mut self, pose: &Pose) {
+        self.spheres.clear();
+        for sp in &self.model.body {
+            let c = pose.transform_point(&Point3::from(Vector3::from(sp.center)));
+            self.spheres.push(PosedSphere {
+                center: c.coords,
+                radius: sp.radius,
+                velocity: pose.velocity_at(&c),
+                spin: pose.angular_velocity,
+            });
+        }
+        self.spheres.extend_from_slice(&self.obstacles);
+    }
+
+    /// One sub-step of length `h` from `self.time`: forces, articulated-body dynamics,
+    /// body correction.
+    fn substep(&mut self, h: f64) -> (usize, usize) {
+        let t = self.time;
+        let (base0, _) = self.base_at(t, h);
+        let (base1, pose1) = self.base_at(t + h, h);
+        let pose0 = if self.settling {
+            pose1
+        } else {
+            self.motion.pose(t)
+        };
+        let rot_eps = if self.settling {
+            base1.rot
+        } else {
+            *self
+                .motion
+                .pose(t + h + EPS)
+                .iso
+                .rotation
+                .to_rotation_matrix()
+                .matrix()
+        };
+        self.posed_spheres(&pose1);
+        let n = self.gp.segments;
+        let drag = self.params.air_drag;
+        for &g in &self.alive {
+            for v in self.chains.verts(g) {
+                let l = g * n + (v % (n + 1)).saturating_sub(1).min(n - 1);
+                let wind =
+                    crate::solver::awt::dynamics::wind_at(&self.params, &self.chains.x[v], t);
+                self.chains.f[v] = (wind - self.chains.v[v]) * (drag * self.chains.m[l]);
+            }
+        }
+        if !self.settling && self.gp.link_strength > 0.0 {
+            self.links.apply(
+                &mut self.chains,
+                self.gp.link_strength,
+                self.gp.link_damping,
+            );
+        }
+        let contacts = if self.gp.collision {
+            self.strips.apply(&mut self.chains, &self.gp)
+        } else {
+            0
+        };
+        let mut pushed = 0;
+        for idx in 0..self.alive.len() {
+            let g = self.alive[idx];
+            let vr = self.chains.verts(g);
+            let root0 = pose0
+                .transform_point(&Point3::from(self.chains.root_rest[g]))
+                .coords;
+            let root1 = pose1
+                .transform_point(&Point3::from(self.chains.root_rest[g]))
+                .coords;
+            self.qold
+                .copy_from_slice(&self.chains.q[g * n..(g + 1) * n]);
+            self.chains.fk(g, &base0, &root0);
+            self.chains.integrate(g, &base0, h);
+            self.chains.fk(g, &base1, &root1);
+            self.buf.copy_from_slice(&self.chains.x[vr.clone()]);
+            self.vbuf.copy_from_slice(&self.chains.v[vr]);
+            let p = body::correct(
+                &mut self.buf,
+                &mut self.vbuf,
+                &self.chains.len[g * n..(g + 1) * n],
+                &self.spheres,
+                self.gp.body_margin,
+                self.gp.body_friction,
+            );
+            if p > 0 {
+                pushed += p;
+                self.chains
+                    .angles_from(g, &base1.rot, &self.buf, &mut self.qbuf);
+                for i in 0..=n {
+                    self.buf[i] += self.vbuf[i] * EPS;
+                }
+                self.chains
+                    .angles_from(g, &rot_eps, &self.buf, &mut self.qeps);
+                for i in 0..n {
+                    self.chains.q[g * n + i] = self.qbuf[i];
+                    self.chains.qd[g * n + i] = (self.qeps[i] - self.qbuf[i]) / EPS;
+                }
+                self.chains.fk(g, &base1, &root1);
+            }
+        }
+        self.time = t + h;
+        self.pose = if self.settling {
+            pose1
+        } else {
+            self.motion.pose(self.time)
+        };
+        (contacts, pushed)
+    }
+
+    /// The vertices of the initial guides in the head frame (world positions mapped back
+    /// through the current pose), guide by guide, into `out`.
+    pub fn head_frame_positions(&self, out: &mut Vec<Vector3<f64>>) {
+        out.clear();
+        let inv = self.pose.iso.inverse();
+        for &g in &self.alive[..] {
+            if g >= self.initial {
+                continue;
+            }
+            for v in self.chains.verts(g) {
+                out.push(inv.transform_point(&Point3::from(self.chains.x[v])).coords);
+            }
+        }
+    }
+
+    /// Moves time and pose to `t` without simulating (the guides keep their joint state, so
+    /// they move with the head). For tests and experiments that place the hair by hand.
+    pub fn place(&mut self, t: f64) {
+        self.time = t;
+        self.pose = self.motion.pose(t);
+        let (base, _) = self.base_at(t, self.params.dt);
+        self.fk_all(&base, t);
+    }
+
+    /// Puts guide `g` in the configuration `pts` (`n + 1` world points, root first, directions
+    /// only) moving with `vel` (world vertex velocities, through the angle change over a short
+    /// interval). Used for insertion and by tests.
+    pub fn set_guide_state(&mut self, g: usize, pts: &[Vector3<f64>], vel: &[Vector3<f64>]) {
+        let n = self.gp.segments;
+        let h = 1e-4;
+        let rot_now = *self.pose.iso.rotation.to_rotation_matrix().matrix();
+        let prev_pose = self.motion.pose((self.time - h).max(0.0));
+        let rot_prev = *prev_pose.iso.rotation.to_rotation_matrix().matrix();
+        for i in 0..=n {
+            self.buf[i] = pts[i] - vel[i] * h;
+        }
+        self.chains
+            .angles_from(g, &rot_prev, &self.buf, &mut self.qold);
+        self.chains.angles_from(g, &rot_now, pts, &mut self.qbuf);
+        for i in 0..n {
+            let dq = (self.qbuf[i] - self.qold[i]).map(chain::wrap);
+            self.chains.q[g * n + i] = self.qbuf[i];
+            self.chains.qd[g * n + i] = dq / h;
+        }
+        let (base, pose) = self.base_at(self.time, self.params.dt);
+        let root = pose
+            .transform_point(&Point3::from(self.chains.root_rest[g]))
+            .coords;
+        self.chains.fk(g, &base, &root);
+    }
+}

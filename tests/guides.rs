@@ -1,0 +1,588 @@
+//! The guide-strand solver (Chang, Jin, Yu 2002): each rule on its own, then invariants.
+
+use nalgebra::{Matrix3, Point3, Vector3, Vector6};
+use wisptree::scene::Scene;
+use wisptree::solver::guides::chain::{Base, Chains};
+use wisptree::solver::guides::links::{stiffness_factor, Links};
+use wisptree::solver::guides::strips::{orientation_scale, Strips};
+use wisptree::solver::guides::{GuideParams, GuideSolver};
+use wisptree::solver::{EventKind, Solver, SolverKind};
+
+fn solver(style: &str, motion: &str, f: impl FnOnce(&mut GuideParams)) -> GuideSolver {
+    let scene = Scene::load(style, motion, SolverKind::Guides).unwrap();
+    let mut gp = scene.loaded.style.guides.clone();
+    f(&mut gp);
+    GuideSolver::new(
+        scene.model.clone(),
+        scene.motion.clone(),
+        scene.loaded.style.sim.clone(),
+        gp,
+    )
+}
+
+fn still_base() -> Base {
+    Base {
+        rot: Matrix3::identity(),
+        vel: Vector6::zeros(),
+        acc: Vector6::new(0.0, 0.0, 0.0, 0.0, 9.81, 0.0),
+    }
+}
+
+/// A 10-segment chain 0.3 m long, rest shape a quarter circle leaving the root sideways.
+fn test_chain(k: f64, damping: f64) -> (Chains, Vector3<f64>) {
+    let n = 10;
+    let root = Vector3::new(0.0, 1.6, 0.0);
+    let rest: Vec<Vector3<f64>> = (0..=n)
+        .map(|i| {
+            let a = std::f64::consts::FRAC_PI_2 * i as f64 / n as f64;
+            root + Vector3::new(a.sin(), a.cos() - 1.0, 0.2 * a) * 0.2
+        })
+        .collect();
+    let mut c = Chains::new(n, 1);
+    c.init_guide(0, &rest, 0.01, (k, 1.0, damping));
+    (c, root)
+}
+
+/// Largest energy error of the undamped, spring-free test chain swinging under gravity for
+/// 2 s with sub-step `h`, checking segment lengths on the way.
+fn energy_drift(h: f64) -> (f64, f64) {
+    let (mut c, root) = test_chain(0.0, 0.0);
+    c.max_rate = f64::INFINITY; // the dynamics alone, without the safety limit
+    let base = still_base();
+    let g = Vector3::new(0.0, -9.81, 0.0);
+    c.fk(0, &base, &root);
+    let e0 = c.energy(0, &g);
+    let tip0 = c.x[10];
+    let (mut worst, mut moved): (f64, f64) = (0.0, 0.0);
+    let every = (0.01 / h) as usize;
+    for step in 0..(2.0 / h) as usize {
+        c.fk(0, &base, &root);
+        c.integrate(0, &base, h);
+        c.fk(0, &base, &root);
+        if step % every == 0 {
+            for i in 0..c.n {
+                let d = (c.x[i + 1] - c.x[i]).norm();
+                assert!(
+                    (d - c.len[i]).abs() < 1e-12,
+                    "segment {i}: {d} vs {}",
+                    c.len[i]
+                );
+            }
+            worst = worst.max((c.energy(0, &g) - e0).abs());
+            moved = moved.max((c.x[10] - tip0).norm());
+        }
+    }
+    (worst, moved)
+}
+
+#[test]
+fn chain_keeps_lengths_and_conserves_energy() {
+    let scale = 0.01 * 9.81 * 0.3; // m g L, J
+    let (coarse, _) = energy_drift(5e-5);
+    let (fine, moved) = energy_drift(2.5e-5);
+    assert!(moved > 0.1, "the tip moved only {moved} m");
+    // Semi-implicit Euler: a bounded energy error of order h, which halves with the step;
+    // a wrong articulated-body recursion would leave an error that does not converge.
+    assert!(
+        fine < 0.015 * scale,
+        "energy drift {fine} J (scale {scale} J)"
+    );
+    assert!(
+        fine < 0.6 * coarse,
+        "no convergence: {coarse} J then {fine} J"
+    );
+}
+
+#[test]
+fn displaced_chain_returns_to_rest() {
+    let (mut c, root) = test_chain(400.0, 20.0);
+    let mut base = still_base();
+    base.acc = Vector6::zeros(); // no gravity: the rest shape is the equilibrium
+    c.fk(0, &base, &root);
+    let rest = c.x[..11].to_vec();
+    c.q[3] = nalgebra::Vector2::new(0.6, -0.4);
+    c.q[7] = nalgebra::Vector2::new(-0.5, 0.8);
+    c.fk(0, &base, &root);
+    let off = (0..11)
+        .map(|i| (c.x[i] - rest[i]).norm())
+        .fold(0.0, f64::max);
+    assert!(off > 0.05, "displaced by only {off} m");
+    for _ in 0..2000 {
+        c.fk(0, &base, &root);
+        c.integrate(0, &base, 2.5e-3);
+        c.fk(0, &base, &root);
+    }
+    let err = (0..11)
+        .map(|i| (c.x[i] - rest[i]).norm())
+        .fold(0.0, f64::max);
+    assert!(err < 1e-3, "still {err} m from rest after 5 s");
+}
+
+/// Two straight vertical guides of `n` segments, `gap` apart along x.
+fn two_guides(n: usize, gap: f64, len: f64) -> (Chains, [Vector3<f64>; 2]) {
+    let mut c = Chains::new(n, 2);
+    let roots = [Vector3::new(0.0, 1.0, 0.0), Vector3::new(gap, 1.0, 0.0)];
+    for (g, r) in roots.iter().enumerate() {
+        let rest: Vec<Vector3<f64>> = (0..=n)
+            .map(|i| r - Vector3::y() * (len * i as f64 / n as f64))
+            .collect();
+        c.init_guide(g, &rest, 0.01, (0.0, 1.0, 0.0));
+    }
+    let base = still_base();
+    for g in 0..2 {
+        c.fk(g, &base, &roots[g]);
+    }
+    (c, roots)
+}
+
+#[test]
+fn link_stiffness_curve() {
+    // Full up to stretch 1, decreasing strictly between 1 and 2, zero from 2 on (Fig. 2).
+    for s in [0.0, 0.3, 0.999, 1.0] {
+        assert_eq!(stiffness_factor(s), 1.0, "stretch {s}");
+    }
+    let mut last = 1.0;
+    for k in 1..20 {
+        let f = stiffness_factor(1.0 + k as f64 / 20.0);
+        assert!(
+            f < last && f > 0.0,
+            "stretch {}: {f} after {last}",
+            1.0 + k as f64 / 20.0
+        );
+        last = f;
+    }
+    for s in [2.0, 2.5, 10.0] {
+        assert_eq!(stiffness_factor(s), 0.0, "stretch {s}");
+    }
+}
+
+#[test]
+fn static_link_pulls_back_then_breaks_for_good() {
+    let (mut c, roots) = two_guides(4, 0.01, 0.2);
+    let links = Links::build(&c, &[0, 1], 1, 0.03, None);
+    assert!(!links.is_empty());
+    let base = still_base();
+    let force_on_1 = |c: &mut Chains, links: &mut Links, dx: f64| {
+        c.fk(1, &base, &(roots[1] + Vector3::new(dx, 0.0, 0.0)));
+        for f in &mut c.f {
+            *f = Vector3::zeros();
+        }
+        links.apply(c, 100.0, 0.0);
+        c.f[c.verts(1)].iter().map(|f| f.x).sum::<f64>()
+    };
+    let mut links = links;
+    // Guide 1 moved away along +x by half a segment: its links pull it back (−x).
+    let seg = c.len[0];
+    let f_half = force_on_1(&mut c, &mut links, 0.5 * seg);
+    assert!(f_half < 0.0, "pull {f_half}");
+    // At stretch 1.5 the spring is weaker than full stiffness would give.
+    let f_15 = force_on_1(&mut c, &mut links, 1.5 * seg);
+    assert!(
+        f_15 < 0.0 && f_15.abs() < 3.0 * f_half.abs(),
+        "{f_15} vs {f_half}"
+    );
+    assert_eq!(links.intact(), links.len());
+    // Past stretch 2 the links break, and stay broken when the guide comes back.
+    force_on_1(&mut c, &mut links, 2.2 * seg);
+    let owned_by_1 = (0..links.len())
+        .filter(|&k| links.owner[k] as usize / 4 == 1)
+        .count();
+    assert!(links.intact() < links.len());
+    let back = force_on_1(&mut c, &mut links, 0.5 * seg);
+    let broken_now = links.len() - links.intact();
+    assert!(
+        broken_now >= owned_by_1,
+        "{broken_now} broken, {owned_by_1} owned"
+    );
+    assert_eq!(back, 0.0, "a broken link pulled: {back}");
+}
+
+#[test]
+fn strip_repulsion_is_scaled_by_orientation() {
+    let x = Vector3::x();
+    let y = Vector3::y();
+    assert_eq!(orientation_scale(&x, &x), 0.0);
+    assert_eq!(orientation_scale(&x, &(-x)), 0.0);
+    assert!((orientation_scale(&x, &y) - 1.0).abs() < 1e-12);
+    let d45 = Vector3::new(1.0, 1.0, 0.0).normalize();
+    assert!((orientation_scale(&x, &d45) - 0.5f64.sqrt()).abs() < 1e-12);
+
+    // Segment against segment, 3 mm apart: parallel guides get no repulsion, crossing ones do.
+    let params = GuideParams::default();
+    let repulsion = |cross: bool| {
+        let mut c = Chains::new(1, 2);
+        let a = [Vector3::new(0.0, 1.0, 0.0), Vector3::new(0.0, 0.9, 0.0)];
+        let b = if cross {
+            [
+                Vector3::new(0.003, 0.95, -0.05),
+                Vector3::new(0.003, 0.95, 0.05),
+            ]
+        } else {
+            [Vector3::new(0.003, 1.0, 0.0), Vector3::new(0.003, 0.9, 0.0)]
+        };
+        c.init_guide(0, &a, 0.01, (0.0, 1.0, 0.0));
+        c.init_guide(1, &b, 0.01, (0.0, 1.0, 0.0));
+        let base = still_base();
+        c.fk(0, &base, &a[0]);
+        c.fk(1, &base, &b[0]);
+        let mut strips = Strips::default();
+        strips.rebuild(1, &[], &c.x.clone(), 0.001);
+        strips.detect(&c, &[0, 1], 2.0 * params.contact_distance);
+        let n = strips.apply(&mut c, &params);
+        (n, c.f[2].x + c.f[3].x)
+    };
+    let (n_par, f_par) = repulsion(false);
+    let (n_cross, f_cross) = repulsion(true);
+    assert_eq!(n_par, 0, "parallel segments are not candidates");
+    assert_eq!(f_par, 0.0);
+    assert_eq!(n_cross, 1);
+    assert!(
+        f_cross > 0.0,
+        "the crossing segment is pushed away (+x): {f_cross}"
+    );
+}
+
+#[test]
+fn broken_triangle_recovers() {
+    let (mut c, roots) = two_guides(4, 0.01, 0.2);
+    let mut strips = Strips::default();
+    let rest = c.x.clone();
+    strips.rebuild(4, &[(0, 1)], &rest, 0.001);
+    assert_eq!(strips.tri.len(), 8);
+    assert_eq!(strips.update_broken(&c, 2.5), 0);
+    let base = still_base();
+    c.fk(1, &base, &(roots[1] + Vector3::new(0.03, 0.0, 0.0)));
+    assert_eq!(
+        strips.update_broken(&c, 2.5),
+        8,
+        "4x wider: every triangle broken"
+    );
+    c.fk(1, &base, &(roots[1] + Vector3::new(0.005, 0.0, 0.0)));
+    assert_eq!(
+        strips.update_broken(&c, 2.5),
+        0,
+        "back within 2.5x: all intact again"
+    );
+}
+
+fn small(style: &str, motion: &str) -> GuideSolver {
+    solver(style, motion, |g| g.count = 40)
+}
+
+#[test]
+fn guide_inserted_halfway_with_interpolated_state_and_removed() {
+    let mut s = solver("long", "still", |g| {
+        g.count = 60;
+        g.max_inserted = 4;
+        g.insert_distance = 1.0;
+        g.remove_distance = 0.5;
+    });
+    let n = s.guide_params().segments;
+    let strips_before = s.strips.tri.len();
+    let alive_before = s.alive().len();
+    // A pair whose mean stays clear of the body, so no correction moves the new guide.
+    let (a, b) = s.base_pairs()[0];
+    let (a, b) = (a as usize, b as usize);
+    let slot = s.insert_between(a, b).unwrap();
+    assert_eq!(s.alive().len(), alive_before + 1);
+    assert_eq!(
+        s.strips.tri.len(),
+        strips_before + 2 * n,
+        "one strip became two"
+    );
+    let xs = s.chains.x.clone();
+    let x = |g: usize, i: usize| xs[g * (n + 1) + i];
+    let mid_root = (x(a, 0) + x(b, 0)) * 0.5;
+    assert!(
+        (x(slot, 0) - mid_root).norm() < 0.01,
+        "root off the midpoint"
+    );
+    for i in 1..=n {
+        let mid = (x(a, i) + x(b, i)) * 0.5;
+        let spread = (x(a, i) - x(b, i)).norm();
+        assert!(
+            (x(slot, i) - mid).norm() < 0.25 * spread + 0.01,
+            "vertex {i}: {} from the midpoint (spread {spread})",
+            (x(slot, i) - mid).norm()
+        );
+    }
+    // Velocities: swing both neighbours about their roots, insert again, compare.
+    s.remove(slot);
+    assert_eq!(s.alive().len(), alive_before);
+    assert_eq!(s.strips.tri.len(), strips_before);
+    for g in [a, b] {
+        s.chains.qd[g * n] = nalgebra::Vector2::new(1.5, 0.5);
+    }
+    let t = s.time();
+    s.place(t);
+    let slot = s.insert_between(a, b).unwrap();
+    for i in 1..=n {
+        let v = s.chains.v[slot * (n + 1) + i];
+        let mean = (s.chains.v[a * (n + 1) + i] + s.chains.v[b * (n + 1) + i]) * 0.5;
+        assert!(mean.norm() > 0.01, "vertex {i} not moving");
+        assert!(
+            (v - mean).norm() < 0.2 * mean.norm(),
+            "vertex {i}: {v:?} vs {mean:?}"
+        );
+    }
+    // The drift is under remove_distance: the next step removes it, as an event.
+    let mut r = s.new_report();
+    s.step(&mut r);
+    assert!(r
+        .events
+        .iter()
+        .any(|e| e.kind == EventKind::GuideRemove && e.tree as usize == slot));
+    assert_eq!(s.alive().len(), alive_before);
+}
+
+#[test]
+fn guides_inserted_where_neighbours_drift_apart_up_to_the_cap() {
+    let mut s = solver("long", "shake", |g| {
+        g.count = 60;
+        g.max_inserted = 3;
+        g.insert_distance = 0.01;
+        g.remove_distance = 0.005;
+    });
+    let mut r = s.new_report();
+    let mut inserted = 0;
+    for _ in 0..60 {
+        s.step(&mut r);
+        inserted += r
+            .events
+            .iter()
+            .filter(|e| e.kind == EventKind::GuideInsert)
+            .count();
+        assert!(s.inserted() <= 3);
+        s.validate().unwrap();
+    }
+    assert!(inserted > 0, "no guide inserted");
+}
+
+#[test]
+fn dense_strands_move_rigidly_with_rigidly_moved_guides() {
+    let mut s = small("long", "lean");
+    s.sync_display();
+    let model = s.model().clone();
+    let mut d0 = Vec::new();
+    for st in 0..model.strands.len() {
+        s.strand_points(st, &mut d0);
+    }
+    let mut head = Vec::new();
+    s.head_frame_positions(&mut head); // the pose is the identity at t = 0
+    let n = s.guide_params().segments;
+    s.place(0.8);
+    let pose = *s.pose();
+    assert!(pose.iso.rotation.angle() > 0.3, "lean has turned the head");
+    for (j, g) in s.alive().to_vec().into_iter().enumerate() {
+        let pts: Vec<Vector3<f64>> = (0..=n)
+            .map(|i| {
+                pose.transform_point(&Point3::from(head[j * (n + 1) + i]))
+                    .coords
+            })
+            .collect();
+        s.set_guide_state(g, &pts, &vec![Vector3::zeros(); n + 1]);
+    }
+    s.sync_display();
+    let mut d1 = Vec::new();
+    for st in 0..model.strands.len() {
+        s.strand_points(st, &mut d1);
+    }
+    let worst = d0
+        .iter()
+        .zip(&d1)
+        .map(|(a, b)| (pose.transform_point(&Point3::from(*a)).coords - b).norm())
+        .fold(0.0, f64::max);
+    assert!(
+        worst < 1e-6,
+        "a dense point is {worst} m off the rigid motion"
+    );
+    // And they do follow their guides: bend one guide, its strands move, the far ones do not.
+    let g0 = s.alive()[0];
+    let mut pts: Vec<Vector3<f64>> = (0..=n).map(|i| s.chains.x[g0 * (n + 1) + i]).collect();
+    for (i, p) in pts.iter_mut().enumerate() {
+        *p += Vector3::x() * (0.01 * i as f64);
+    }
+    s.set_guide_state(g0, &pts, &vec![Vector3::zeros(); n + 1]);
+    s.sync_display();
+    let mut d2 = Vec::new();
+    for st in 0..model.strands.len() {
+        s.strand_points(st, &mut d2);
+    }
+    let moved = d1
+        .iter()
+        .zip(&d2)
+        .filter(|(a, b)| (*a - *b).norm() > 1e-4)
+        .count();
+    assert!(
+        moved > 0 && moved < d1.len() / 2,
+        "{moved} of {} points moved",
+        d1.len()
+    );
+}
+
+/// Every paper style under every motion for 10 s (with fewer guides, to keep the file fast):
+/// the state stays finite and valid, every vertex within its guide's length of its root, and
+/// the kinetic energy bounded.
+fn stable_for_10_s(style: &str) {
+    for motion in ["lean", "run", "jump", "shake", "stop"] {
+        let mut s = solver(style, motion, |g| {
+            g.count = 24;
+            g.max_inserted = 8;
+        });
+        let n = s.guide_params().segments;
+        let mut r = s.new_report();
+        let steps = (10.0 / s.dt()).round() as usize;
+        let mass = s.params().total_mass * 24.0 / 24.0;
+        for k in 0..steps {
+            s.step(&mut r);
+            if k % 25 == 0 {
+                s.validate()
+                    .unwrap_or_else(|e| panic!("{style} {motion} step {k}: {e}"));
+                for &g in s.alive() {
+                    let total: f64 = s.chains.len[g * n..(g + 1) * n].iter().sum();
+                    let root = s.chains.x[g * (n + 1)];
+                    for i in 1..=n {
+                        let d = (s.chains.x[g * (n + 1) + i] - root).norm();
+                        assert!(
+                            d <= total + 1e-9,
+                            "{style} {motion}: guide {g} out of reach"
+                        );
+                    }
+                }
+                // Below every vertex moving at 10 m/s.
+                let ke = r.counters.kinetic_energy;
+                assert!(
+                    ke.is_finite() && ke < 0.5 * mass * 100.0,
+                    "{style} {motion}: {ke} J"
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn stable_short() {
+    stable_for_10_s("short");
+}
+
+#[test]
+fn stable_short_curly() {
+    stable_for_10_s("short_curly");
+}
+
+#[test]
+fn stable_long() {
+    stable_for_10_s("long");
+}
+
+#[test]
+fn stable_long_curly() {
+    stable_for_10_s("long_curly");
+}
+
+#[test]
+fn deterministic() {
+    let run = || {
+        let mut s = small("long", "shake");
+        let mut r = s.new_report();
+        for _ in 0..50 {
+            s.step(&mut r);
+        }
+        s.sync_display();
+        let mut pts = Vec::new();
+        for st in (0..s.model().strands.len()).step_by(97) {
+            s.strand_points(st, &mut pts);
+        }
+        (s.chains.x.clone(), pts)
+    };
+    let (a, da) = run();
+    let (b, db) = run();
+    assert!(a.iter().zip(&b).all(|(p, q)| p
+        .iter()
+        .zip(q.iter())
+        .all(|(x, y)| x.to_bits() == y.to_bits())));
+    assert!(da.iter().zip(&db).all(|(p, q)| p
+        .iter()
+        .zip(q.iter())
+        .all(|(x, y)| x.to_bits() == y.to_bits())));
+}
+
+#[test]
+fn scene_loads_guides_and_draws_links_strips_and_stats() {
+    let scene = Scene::load("long", "lean", SolverKind::Guides).unwrap();
+    let mut s = scene.solver();
+    assert_eq!(s.kind(), SolverKind::Guides);
+    assert_eq!(SolverKind::parse("guides").unwrap(), SolverKind::Guides);
+    let mut r = s.new_report();
+    for _ in 0..4 {
+        s.step(&mut r);
+    }
+    s.validate().unwrap();
+    let stat = |p: &str| r.stats.iter().find(|x| x.path == p).map(|x| x.value);
+    assert_eq!(stat("/stats/guides"), Some(200.0));
+    let intact = stat("/stats/links_intact").unwrap();
+    let broken = stat("/stats/links_broken").unwrap();
+    assert!(intact > 1000.0 && broken >= 0.0);
+    assert!(stat("/stats/contacts").is_some());
+    let mut f = wisptree::frame::Frame::default();
+    let mut fb = wisptree::pipeline::FrameBuilder::new(s.model(), 50, 2);
+    fb.fill(s.as_mut(), &mut f);
+    assert_eq!(f.solver, "guides");
+    assert_eq!(f.nodes.positions.len(), 200 * 16);
+    assert_eq!(f.segments.starts.len(), 200 * 15);
+    let links = f
+        .extras
+        .iter()
+        .find(|e| e.path == "/hair/guides/static_links")
+        .unwrap();
+    assert_eq!(links.len() as f64, intact + broken);
+    assert_eq!(links.colors.len(), links.len());
+    let strips = f
+        .extras
+        .iter()
+        .find(|e| e.path == "/hair/guides/strips")
+        .unwrap();
+    assert!(strips.len() > 100);
+    assert_eq!(strips.colors.len(), strips.len());
+    assert_eq!(f.strands.len(), 50);
+}
+
+#[test]
+fn bad_guide_values_are_errors_naming_the_field() {
+    let text = wisptree::style::builtin::builtin("short").unwrap().text;
+    for (bad, field) in [
+        ("guides: (count: 0),", "guides.count"),
+        (
+            "guides: (remove_distance: 0.5, insert_distance: 0.1),",
+            "guides.remove_distance",
+        ),
+        ("guides: (strip_break: 0.5),", "guides.strip_break"),
+    ] {
+        let t = text.replacen("Style(\n", &format!("Style(\n    {bad}\n"), 1);
+        assert_ne!(t, text);
+        let err = wisptree::style::parse(std::path::Path::new("x.ron"), &t).unwrap_err();
+        let msg = err.to_string();
+        assert!(msg.contains("x.ron") && msg.contains(field), "{msg}");
+    }
+}
+
+#[test]
+fn chang_shake_links_keep_the_hairstyle() {
+    let def = wisptree::experiment::find("chang-shake").unwrap();
+    let opts = wisptree::experiment::ExperimentOptions {
+        duration_scale: 0.5,
+    };
+    let runs = (def.run)(&opts, &mut wisptree::experiment::NoFrames).unwrap();
+    let get = |label: &str, m: &str| {
+        runs.iter().find(|r| r.label == label).unwrap().metrics[m]
+            .as_f64()
+            .unwrap()
+    };
+    for r in &runs {
+        eprintln!("{} {:?}", r.label, r.metrics);
+    }
+    assert!(get("links", "shape_error_m") < get("no_links", "shape_error_m"));
+    assert!(get("links_broken", "shape_error_m") > get("links", "shape_error_m"));
+    assert!(get("links_broken", "links_broken_fraction") > get("links", "links_broken_fraction"));
+    assert_eq!(get("no_links", "links_broken_fraction"), 0.0);
+}
