@@ -235,7 +235,7 @@ impl Scene {
         for q in 0..=20 {
             let pose = self.motion.pose(q as f64 * 0.25);
             for (j, p) in m.strands.rest.iter().enumerate() {
-                if (j / m.k) % 7 != 0 {
+                if !(j / m.k).is_multiple_of(7) {
                     continue;
                 }
                 let w = pose.transform_point(&nalgebra::Point3::from(*p));

@@ -119,6 +119,7 @@ fn displaced_chain_returns_to_rest() {
 }
 
 /// Two straight vertical guides of `n` segments, `gap` apart along x.
+#[allow(clippy::needless_range_loop)] // `g` indexes the chains and their roots alike
 fn two_guides(n: usize, gap: f64, len: f64) -> (Chains, [Vector3<f64>; 2]) {
     let mut c = Chains::new(n, 2);
     let roots = [Vector3::new(0.0, 1.0, 0.0), Vector3::new(gap, 1.0, 0.0)];

@@ -82,5 +82,13 @@ fn awt_fig5_the_split_travels_from_tip_to_root() {
 #[test]
 fn every_experiment_is_registered_once() {
     let names: Vec<&str> = wisptree::experiment::all().iter().map(|e| e.name).collect();
-    assert_eq!(names, ["plante-fig8", "plante-fig9", "awt-fig5"]);
+    for n in ["plante-fig8", "plante-fig9", "awt-fig5", "chang-shake"] {
+        assert_eq!(
+            names.iter().filter(|m| **m == n).count(),
+            1,
+            "{n} once in {names:?}"
+        );
+        assert!(wisptree::experiment::find(n).is_some(), "{n}");
+    }
+    assert!(wisptree::experiment::find("plante-fig10").is_none());
 }

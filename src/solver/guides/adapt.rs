@@ -23,6 +23,8 @@ use crate::solver::{AdaptEvent, EventKind, StepReport};
 impl GuideSolver {
     /// Largest drift apart of corresponding vertices of guides `a` and `b` (their distance
     /// minus the distance `d0` they had at the start), and where.
+    // (`i` indexes both guides' vertices and `d0` alike.)
+    #[allow(clippy::needless_range_loop)]
     pub fn farthest(&self, a: usize, b: usize, d0: &[f64]) -> (f64, usize) {
         let n = self.gp.segments;
         let mut best = (f64::NEG_INFINITY, 0);

@@ -77,6 +77,8 @@ impl Dense {
 
     /// Chooses each strand's `blend` nearest guides among `roots` (slot, rest root), weights by
     /// inverse distance. Ties go to the lower slot, so the binding is deterministic.
+    // (`j` indexes the nearest guides and their weights alike.)
+    #[allow(clippy::needless_range_loop)]
     pub fn bind(&mut self, model: &HairModel, roots: &[(usize, Vector3<f64>)]) {
         let k = model.k;
         let b = self.blend;

@@ -124,6 +124,8 @@ pub fn resample(pts: &[Vector3<f64>], m: usize) -> Vec<Vector3<f64>> {
 
 /// Picks `count` strands whose roots cover the scalp uniformly: farthest-point sampling from
 /// strand 0 (deterministic; ties go to the lower index).
+// (`s` indexes strands and their distances alike.)
+#[allow(clippy::needless_range_loop)]
 pub fn pick_guides(model: &HairModel, count: usize) -> Vec<usize> {
     let k = model.k;
     let n = model.strands.len();
