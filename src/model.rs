@@ -227,70 +227,15 @@ impl HairModel {
             lv.strand_count = members.iter().map(|m| m.len() as u32).collect();
             let _ = l;
         }
-        {
-            let lv = &mut levels[finest];
-            lv.rest_pos = vec![Vector3::zeros(); n_finest * k];
-            lv.radius = vec![0.0; n_finest * k];
-            lv.mass = vec![0.0; n_finest * k];
-            for (g, members) in members_per_level[finest].iter().enumerate() {
-                for i in 0..k {
-                    let mut c = Vector3::zeros();
-                    for &m in members {
-                        c += pts[m as usize * k + i];
-                    }
-                    c /= members.len() as f64;
-                    let mut r: f64 = MIN_RADIUS;
-                    for &m in members {
-                        r = r.max((pts[m as usize * k + i] - c).norm());
-                    }
-                    lv.rest_pos[g * k + i] = c;
-                    lv.radius[g * k + i] = r;
-                    lv.mass[g * k + i] = point_mass * members.len() as f64;
-                }
-            }
-        }
-        // Coarser nodes from their sub-nodes: mass = exact sum, position = centre of mass,
-        // radius refitted to enclose every sub cross-section (the paper's post-processing).
-        for l in (0..finest).rev() {
-            let (upper, lower) = levels.split_at_mut(l + 1);
-            let lv = &mut upper[l];
-            let sub = &lower[0];
-            let gcs = lv.gc_count();
-            lv.rest_pos = vec![Vector3::zeros(); gcs * k];
-            lv.radius = vec![0.0; gcs * k];
-            lv.mass = vec![0.0; gcs * k];
-            for g in 0..gcs {
-                for i in 0..k {
-                    let mut m = 0.0;
-                    let mut c = Vector3::zeros();
-                    for sg in lv.sub_gcs[g].clone() {
-                        let j = sg as usize * k + i;
-                        m += sub.mass[j];
-                        c += sub.rest_pos[j] * sub.mass[j];
-                    }
-                    c /= m;
-                    let mut r: f64 = MIN_RADIUS;
-                    for sg in lv.sub_gcs[g].clone() {
-                        let j = sg as usize * k + i;
-                        r = r.max((sub.rest_pos[j] - c).norm() + sub.radius[j]);
-                    }
-                    lv.rest_pos[g * k + i] = c;
-                    lv.radius[g * k + i] = r;
-                    lv.mass[g * k + i] = m;
-                }
-            }
-        }
-
-        for lv in &mut levels {
-            lv.mass_below = vec![0.0; lv.mass.len()];
-            for g in 0..lv.gc_count() {
-                let mut acc = 0.0;
-                for i in (0..k).rev() {
-                    acc += lv.mass[g * k + i];
-                    lv.mass_below[g * k + i] = acc;
-                }
-            }
-        }
+        finest_nodes(
+            &mut levels[finest],
+            &members_per_level[finest],
+            &pts,
+            k,
+            point_mass,
+        );
+        coarse_nodes(&mut levels, k);
+        masses_below(&mut levels, k);
 
         // Strand offsets from their finest node.
         strands.offset = strands
@@ -606,4 +551,83 @@ fn check_strands(style: &LoadedStyle, hair: &RawHair) -> Result<(), StyleError> 
         }
     }
     Ok(())
+}
+
+/// Finest nodes: centre of mass and enclosing radius of their strands' points; masses.
+fn finest_nodes(
+    lv: &mut Level,
+    members: &[Vec<u32>],
+    pts: &[Vector3<f64>],
+    k: usize,
+    point_mass: f64,
+) {
+    let n_finest = members.len();
+    lv.rest_pos = vec![Vector3::zeros(); n_finest * k];
+    lv.radius = vec![0.0; n_finest * k];
+    lv.mass = vec![0.0; n_finest * k];
+    for (g, members) in members.iter().enumerate() {
+        for i in 0..k {
+            let mut c = Vector3::zeros();
+            for &m in members {
+                c += pts[m as usize * k + i];
+            }
+            c /= members.len() as f64;
+            let mut r: f64 = MIN_RADIUS;
+            for &m in members {
+                r = r.max((pts[m as usize * k + i] - c).norm());
+            }
+            lv.rest_pos[g * k + i] = c;
+            lv.radius[g * k + i] = r;
+            lv.mass[g * k + i] = point_mass * members.len() as f64;
+        }
+    }
+}
+
+/// Coarser nodes from their sub-nodes: mass = exact sum, position = centre of mass, radius
+/// refitted to enclose every sub cross-section (the paper's post-processing).
+fn coarse_nodes(levels: &mut [Level], k: usize) {
+    let finest = levels.len() - 1;
+    for l in (0..finest).rev() {
+        let (upper, lower) = levels.split_at_mut(l + 1);
+        let lv = &mut upper[l];
+        let sub = &lower[0];
+        let gcs = lv.gc_count();
+        lv.rest_pos = vec![Vector3::zeros(); gcs * k];
+        lv.radius = vec![0.0; gcs * k];
+        lv.mass = vec![0.0; gcs * k];
+        for g in 0..gcs {
+            for i in 0..k {
+                let mut m = 0.0;
+                let mut c = Vector3::zeros();
+                for sg in lv.sub_gcs[g].clone() {
+                    let j = sg as usize * k + i;
+                    m += sub.mass[j];
+                    c += sub.rest_pos[j] * sub.mass[j];
+                }
+                c /= m;
+                let mut r: f64 = MIN_RADIUS;
+                for sg in lv.sub_gcs[g].clone() {
+                    let j = sg as usize * k + i;
+                    r = r.max((sub.rest_pos[j] - c).norm() + sub.radius[j]);
+                }
+                lv.rest_pos[g * k + i] = c;
+                lv.radius[g * k + i] = r;
+                lv.mass[g * k + i] = m;
+            }
+        }
+    }
+}
+
+/// Per node, the mass from it to the tip of its GC (what the link ending there carries).
+fn masses_below(levels: &mut [Level], k: usize) {
+    for lv in levels.iter_mut() {
+        lv.mass_below = vec![0.0; lv.mass.len()];
+        for g in 0..lv.gc_count() {
+            let mut acc = 0.0;
+            for i in (0..k).rev() {
+                acc += lv.mass[g * k + i];
+                lv.mass_below[g * k + i] = acc;
+            }
+        }
+    }
 }

@@ -344,6 +344,17 @@ pub const MAX_TILES_PER_WISP: u64 = 256;
 
 /// Checks every value a style may get wrong; returns the dotted field path and the reason.
 pub fn validate(style: &Style) -> Result<(), Invalid> {
+    validate_head(style)?;
+    validate_hierarchy(style)?;
+    validate_link(style)?;
+    validate_sim(style)?;
+    validate_hair(style)?;
+    validate_models(style)?;
+    Ok(())
+}
+
+/// The head: scalp and collision spheres.
+fn validate_head(style: &Style) -> Result<(), Invalid> {
     let h = &style.head;
     finite3(&h.scalp.center, "head.scalp.center")?;
     for (a, r) in h.scalp.radii.iter().enumerate() {
@@ -354,6 +365,11 @@ pub fn validate(style: &Style) -> Result<(), Invalid> {
         positive(s.radius, &format!("head.body[{n}].radius"))?;
     }
 
+    Ok(())
+}
+
+/// The GC hierarchy: levels, K, branching.
+fn validate_hierarchy(style: &Style) -> Result<(), Invalid> {
     let hi = &style.hierarchy;
     check(hi.levels >= 1, "hierarchy.levels", || {
         format!("needs at least one level of detail, got {}", hi.levels)
@@ -387,6 +403,11 @@ pub fn validate(style: &Style) -> Result<(), Invalid> {
         "needs at least one top-level wisp".into()
     })?;
 
+    Ok(())
+}
+
+/// The links between nodes.
+fn validate_link(style: &Style) -> Result<(), Invalid> {
     match &style.link {
         Link::Rigid { iterations } => check(*iterations >= 1, "link.iterations", || {
             "needs at least one projection sweep".into()
@@ -397,6 +418,11 @@ pub fn validate(style: &Style) -> Result<(), Invalid> {
         }
     }
 
+    Ok(())
+}
+
+/// The `sim:` parameters.
+fn validate_sim(style: &Style) -> Result<(), Invalid> {
     let s = &style.sim;
     positive(s.total_mass, "sim.total_mass")?;
     non_negative(s.split_threshold, "sim.split_threshold")?;
@@ -446,10 +472,11 @@ pub fn validate(style: &Style) -> Result<(), Invalid> {
     non_negative(s.wind.gust, "sim.wind.gust")?;
     non_negative(s.wind.frequency, "sim.wind.frequency")?;
     positive(s.wind.wavelength, "sim.wind.wavelength")?;
-    crate::solver::guides::params::validate(&style.guides)?;
+    Ok(())
+}
 
-    style.render.validate()?;
-
+/// Where the strands come from.
+fn validate_hair(style: &Style) -> Result<(), Invalid> {
     match &style.hair {
         Hair::Generated(g) => {
             positive(g.density, "hair.density")?;
@@ -568,6 +595,15 @@ pub fn validate(style: &Style) -> Result<(), Invalid> {
             }
         }
     }
+    Ok(())
+}
+
+/// The sections of the other models and the renderer.
+fn validate_models(style: &Style) -> Result<(), Invalid> {
+    crate::solver::guides::params::validate(&style.guides)?;
+
+    style.render.validate()?;
+
     style.layered.validate()?;
     check(
         style.layered.level < style.hierarchy.levels.max(1) || style.layered.level == 1,
