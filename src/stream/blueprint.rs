@@ -250,18 +250,8 @@ pub fn send_blueprint_with(
     )?;
     let render_path = format!("view/{}", uuid_string(&blueprint_uuid(13)));
     if render {
-        bp.log(
-            format!("{render_path}/ViewContents"),
-            &ViewContents::new([QueryExpression::from("+ /render/**")]),
-        )?;
-        bp.log(
-            render_path.as_str(),
-            &ViewBlueprint::new(ViewClass::from("2D"))
-                .with_display_name(Name::from("rendered hair"))
-                .with_space_origin("/render"),
-        )?;
+        log_render_view(&bp, &render_path)?;
     }
-
     let mut plot_paths = Vec::with_capacity(plots.len());
     for (k, v) in plots.iter().enumerate() {
         plot_paths.push(log_view(&blueprint_uuid(2 + k as u8), v)?);
@@ -332,8 +322,15 @@ pub fn send_blueprint_with(
             .with_auto_layout(AutoLayout::from(false))
             .with_auto_views(AutoViews::from(false)),
     )?;
-    // The side panels start collapsed and the time panel as a bar: the hair and the plots get
-    // the room; all of them open again from the viewer's top-right buttons.
+    log_panels(&bp)?;
+    bp.flush_blocking()
+        .map_err(|e| anyhow::anyhow!("flushing the blueprint stream: {e}"))?;
+    activate(rec, storage.take())
+}
+
+/// The side panels start collapsed and the time panel as a bar: the hair and the plots get the
+/// room; all of them open again from the viewer's top-right buttons.
+fn log_panels(bp: &RecordingStream) -> anyhow::Result<()> {
     bp.log(
         "blueprint_panel",
         &PanelBlueprint::new().with_state(PANEL_STATES.0),
@@ -346,10 +343,11 @@ pub fn send_blueprint_with(
         "time_panel",
         &TimePanelBlueprint::new().with_state(PANEL_STATES.2),
     )?;
-    bp.flush_blocking()
-        .map_err(|e| anyhow::anyhow!("flushing the blueprint stream: {e}"))?;
+    Ok(())
+}
 
-    let msgs: Vec<LogMsg> = storage.take();
+/// Sends the blueprint messages to `rec` as its active and default blueprint.
+fn activate(rec: &RecordingStream, msgs: Vec<LogMsg>) -> anyhow::Result<()> {
     let blueprint_id = msgs
         .iter()
         .find_map(|m| match m {
@@ -413,4 +411,19 @@ pub fn send_runs_blueprint(rec: &super::sink::Recording, labels: &[String]) -> a
             rerun::blueprint::BlueprintActivation::default(),
         )
         .context("sending the blueprint")
+}
+
+/// The 2D view of the rendered hair (`/render/hair`).
+fn log_render_view(bp: &RecordingStream, path: &str) -> anyhow::Result<()> {
+    bp.log(
+        format!("{path}/ViewContents"),
+        &ViewContents::new([QueryExpression::from("+ /render/**")]),
+    )?;
+    bp.log(
+        path,
+        &ViewBlueprint::new(ViewClass::from("2D"))
+            .with_display_name(Name::from("rendered hair"))
+            .with_space_origin("/render"),
+    )?;
+    Ok(())
 }

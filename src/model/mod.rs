@@ -11,6 +11,11 @@ use nalgebra::Vector3;
 
 use crate::style::{Link, LoadedStyle, RawHair, Sphere, StyleError};
 
+mod check;
+
+use check::check_strands;
+pub use check::MAX_COORDINATE;
+
 /// Marks "no super-GC" (level 0).
 pub const NONE: u32 = u32::MAX;
 
@@ -141,25 +146,7 @@ impl HairModel {
         }
 
         // 2. Top-level GCs: the style's wisps, or clusters of imported strands.
-        let (mut groups, tree_names): (Vec<Vec<u32>>, Vec<String>) = if hair.wisp_names.is_empty() {
-            let all: Vec<u32> = (0..n as u32).collect();
-            let groups = cluster(&all, s.hierarchy.top_level, &pts, k);
-            let names = (0..groups.len()).map(|t| format!("wisp {t}")).collect();
-            (groups, names)
-        } else {
-            let mut groups = vec![Vec::new(); hair.wisp_names.len()];
-            for (i, st) in hair.strands.iter().enumerate() {
-                groups[st.wisp as usize].push(i as u32);
-            }
-            let names = hair.wisp_names.clone();
-            // Drop empty wisps (a tile too small to hold a root), keeping names aligned.
-            let (g, nm): (Vec<_>, Vec<_>) = groups
-                .into_iter()
-                .zip(names)
-                .filter(|(g, _)| !g.is_empty())
-                .unzip();
-            (g, nm)
-        };
+        let (mut groups, tree_names) = top_level_groups(hair, s.hierarchy.top_level, &pts, k);
 
         // 3. Refine level by level, breadth first, so children are contiguous.
         let n_levels = s.hierarchy.levels;
@@ -464,95 +451,6 @@ fn cluster(members: &[u32], k_clusters: usize, pts: &[Vector3<f64>], k: usize) -
     out
 }
 
-/// Coordinates beyond this many metres are a typo (or a unit error in an import), and their
-/// squares would overflow the clustering's distances.
-pub const MAX_COORDINATE: f64 = 1.0e3;
-
-/// Refuses strands that would make clustering degenerate: non-finite or absurd coordinates,
-/// zero-length strands, two identical strands, and a declared wisp that grew no strand. Each
-/// error names the style's field and the strand.
-fn check_strands(style: &LoadedStyle, hair: &RawHair) -> Result<(), StyleError> {
-    let invalid = |field: String, msg: String| StyleError::Invalid {
-        path: style.path.clone(),
-        line: None,
-        field,
-        msg,
-    };
-    let wisp_of = |st: &crate::style::RawStrand| -> String {
-        hair.wisp_names
-            .get(st.wisp as usize)
-            .map(|w| format!(" (wisp `{w}`)"))
-            .unwrap_or_default()
-    };
-    let mut seen = std::collections::HashMap::with_capacity(hair.strands.len());
-    for (n, st) in hair.strands.iter().enumerate() {
-        if let Some(p) = st
-            .points
-            .iter()
-            .find(|p| p.iter().any(|c| !c.is_finite() || c.abs() > MAX_COORDINATE))
-        {
-            return Err(invalid(
-                "hair".into(),
-                format!(
-                    "strand {n}{} reaches ({:e}, {:e}, {:e}) m: coordinates must be finite and \
-                     within ±{MAX_COORDINATE} m (a typo in a key strand, or a wrong scale?)",
-                    wisp_of(st),
-                    p[0],
-                    p[1],
-                    p[2]
-                ),
-            ));
-        }
-        let length: f64 = st
-            .points
-            .windows(2)
-            .map(|w| (Vector3::from(w[1]) - Vector3::from(w[0])).norm())
-            .sum();
-        if length < 1e-6 {
-            return Err(invalid(
-                "hair".into(),
-                format!(
-                    "strand {n}{} has zero length ({length:e} m): all its points coincide",
-                    wisp_of(st)
-                ),
-            ));
-        }
-        let key: Vec<u64> = st.points.iter().flatten().map(|c| c.to_bits()).collect();
-        if let Some(first) = seen.insert(key, n) {
-            return Err(invalid(
-                "hair".into(),
-                format!(
-                    "strands {first} and {n}{} are identical: duplicate strands make the \
-                     clustering into wisps degenerate",
-                    wisp_of(st)
-                ),
-            ));
-        }
-    }
-    if let crate::style::Hair::Generated(g) = &style.style.hair {
-        let grew = |name: &str| {
-            hair.strands.iter().any(|st| {
-                hair.wisp_names.get(st.wisp as usize).is_some_and(|w| {
-                    w == name || (w.starts_with(name) && w[name.len()..].starts_with('['))
-                })
-            })
-        };
-        for (n, w) in g.wisps.iter().enumerate() {
-            if !grew(&w.name) {
-                return Err(invalid(
-                    format!("hair.wisps[{n}]"),
-                    format!(
-                        "wisp `{}` grows no strand: its region is too small for its density \
-                         (raise `density` or widen `region`)",
-                        w.name
-                    ),
-                ));
-            }
-        }
-    }
-    Ok(())
-}
-
 /// Finest nodes: centre of mass and enclosing radius of their strands' points; masses.
 fn finest_nodes(
     lv: &mut Level,
@@ -629,5 +527,35 @@ fn masses_below(levels: &mut [Level], k: usize) {
                 lv.mass_below[g * k + i] = acc;
             }
         }
+    }
+}
+
+/// The top-level GCs: the style's wisps (empty ones dropped, names kept aligned), or clusters of
+/// imported strands.
+fn top_level_groups(
+    hair: &RawHair,
+    top_level: usize,
+    pts: &[Vector3<f64>],
+    k: usize,
+) -> (Vec<Vec<u32>>, Vec<String>) {
+    let n = hair.strands.len();
+    if hair.wisp_names.is_empty() {
+        let all: Vec<u32> = (0..n as u32).collect();
+        let groups = cluster(&all, top_level, &pts, k);
+        let names = (0..groups.len()).map(|t| format!("wisp {t}")).collect();
+        (groups, names)
+    } else {
+        let mut groups = vec![Vec::new(); hair.wisp_names.len()];
+        for (i, st) in hair.strands.iter().enumerate() {
+            groups[st.wisp as usize].push(i as u32);
+        }
+        let names = hair.wisp_names.clone();
+        // Drop empty wisps (a tile too small to hold a root), keeping names aligned.
+        let (g, nm): (Vec<_>, Vec<_>) = groups
+            .into_iter()
+            .zip(names)
+            .filter(|(g, _)| !g.is_empty())
+            .unzip();
+        (g, nm)
     }
 }
