@@ -14,6 +14,7 @@
 
 mod pipeline;
 mod print;
+pub mod render;
 mod steps;
 
 use std::path::PathBuf;
@@ -73,6 +74,10 @@ pub struct BenchOptions {
     pub rrd: Option<PathBuf>,
     /// Also write the numbers as JSON here.
     pub json: Option<PathBuf>,
+    /// Time the renderer (and only that, with `render_only`).
+    pub render: bool,
+    /// Frames per renderer timing.
+    pub render_frames: usize,
 }
 
 /// One row of the §5.2 table (a style under both `single-level` and `awt`), as written to JSON.
@@ -180,6 +185,9 @@ pub struct BenchReport {
     pub pipeline: Option<RunPipelineResult>,
     /// The same work done sequentially in one thread, timed by part.
     pub pipeline_sequential: Option<PipelineResult>,
+    /// The renderer on three scenes (with `--render`).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub render: Vec<render::RenderRow>,
 }
 
 fn cores() -> usize {
@@ -384,6 +392,11 @@ pub fn run(o: &BenchOptions) -> anyhow::Result<()> {
         (None, None)
     };
     progress.finish_and_clear();
+    let render_rows = if o.render {
+        render::bench_render_scenes(o.render_frames)?
+    } else {
+        Vec::new()
+    };
 
     let report = BenchReport {
         machine: machine_description(),
@@ -395,8 +408,12 @@ pub fn run(o: &BenchOptions) -> anyhow::Result<()> {
         pipeline_wall_s_per_sim_s: pipeline.as_ref().map(|p| p.wall_s_per_sim_s),
         pipeline,
         pipeline_sequential,
+        render: render_rows,
     };
     print_report(&report);
+    if !report.render.is_empty() {
+        render::print_render(&report.render);
+    }
     if let Some(path) = &o.json {
         use anyhow::Context as _;
         let text = serde_json::to_string_pretty(&report)?;

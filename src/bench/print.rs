@@ -4,6 +4,9 @@ use super::*;
 
 /// Prints the §5.2 table, the paper's, and the per-stage breakdowns.
 pub fn print_report(r: &BenchReport) {
+    if r.solvers.is_empty() {
+        return;
+    }
     print_solvers(r);
     let models: &[ModelResult] = r.models.as_deref().unwrap_or(&[]);
     if !models.is_empty() {

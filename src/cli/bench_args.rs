@@ -44,6 +44,10 @@ pub struct BenchArgs {
     /// temporary file.
     #[arg(long, value_name = "FILE")]
     pub rrd: Option<PathBuf>,
+    /// Time the renderer (only) at 640x480 on Long, Long curly and a 16,215-strand head, on 1
+    /// and 2 threads (JSON key "render").
+    #[arg(long)]
+    pub render: bool,
 }
 
 impl BenchArgs {
@@ -78,15 +82,19 @@ impl BenchArgs {
         if solvers.is_empty() {
             return Err(BadInput("--solvers lists no solver".into()).into());
         }
+        // `--render` times the renderer alone.
+        let styles = if self.render { Vec::new() } else { styles };
         Ok(BenchOptions {
             seconds,
             styles,
             solvers,
-            pipeline: !self.no_pipeline,
+            pipeline: !self.no_pipeline && !self.render,
             pipeline_style: self.style("long_curly")?,
             strands: self.strands,
             rrd: self.rrd.clone(),
             json: self.json.clone(),
+            render: self.render,
+            render_frames: if self.quick { 3 } else { 20 },
         })
     }
 

@@ -541,7 +541,7 @@ fn top_level_groups(
     let n = hair.strands.len();
     if hair.wisp_names.is_empty() {
         let all: Vec<u32> = (0..n as u32).collect();
-        let groups = cluster(&all, top_level, &pts, k);
+        let groups = cluster(&all, top_level, pts, k);
         let names = (0..groups.len()).map(|t| format!("wisp {t}")).collect();
         (groups, names)
     } else {
