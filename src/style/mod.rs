@@ -1,6 +1,6 @@
 //! Hairstyle files: parsing, validation, and turning a style into raw strands.
 //!
-//! `load` reads and validates a `.ron` file; `LoadedStyle::strands` generates (seed 004) or
+//! `load` reads and validates a `.ron` file; `LoadedStyle::strands` generates (Zhang & Wünsche 2007, §3) or
 //! imports (TressFX `.tfx`, Cem Yuksel `.hair`, USC-HairSalon `.data`) the strands that the
 //! multiresolution model (`crate::model`) is built from.
 
