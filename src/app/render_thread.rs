@@ -8,7 +8,7 @@
 
 use crossbeam_channel::{Receiver, Sender};
 
-use crate::frame::{EncodedImage, Frame};
+use crate::frame::Frame;
 use crate::render::{camera::DEFAULT_VIEW, encode_jpeg, Camera, Image, RenderInput, Renderer};
 use crate::report::{Aggregate, Stat};
 use crate::scene::Scene;
@@ -73,9 +73,4 @@ impl RenderThread {
             }
         }
     }
-}
-
-/// Keeps a reusable image buffer out of the way when a frame is recycled without rendering.
-pub fn recycle(frame: &mut Frame) -> Option<EncodedImage> {
-    frame.image.take()
 }

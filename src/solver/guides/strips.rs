@@ -408,47 +408,15 @@ fn tangent(chains: &Chains, v: usize) -> Vector3<f64> {
         .unwrap_or_else(Vector3::y)
 }
 
-/// Parameters `(s, t)` of the closest points of segments `p1p2` and `q1q2` (Ericson,
-/// *Real-Time Collision Detection*, §5.1.9).
+/// Parameters `(s, t)` of the closest points of segments `p1p2` and `q1q2`: the AWT
+/// collider's exact test (Ericson, *Real-Time Collision Detection*, §5.1.9), shared.
 pub fn closest_segments(
     p1: &Vector3<f64>,
     p2: &Vector3<f64>,
     q1: &Vector3<f64>,
     q2: &Vector3<f64>,
 ) -> (f64, f64) {
-    let d1 = p2 - p1;
-    let d2 = q2 - q1;
-    let r = p1 - q1;
-    let a = d1.norm_squared();
-    let e = d2.norm_squared();
-    let f = d2.dot(&r);
-    let eps = 1e-18;
-    if a <= eps && e <= eps {
-        return (0.0, 0.0);
-    }
-    if a <= eps {
-        return (0.0, (f / e).clamp(0.0, 1.0));
-    }
-    let c = d1.dot(&r);
-    if e <= eps {
-        return ((-c / a).clamp(0.0, 1.0), 0.0);
-    }
-    let b = d1.dot(&d2);
-    let denom = a * e - b * b;
-    let mut s = if denom > eps {
-        ((b * f - c * e) / denom).clamp(0.0, 1.0)
-    } else {
-        0.0
-    };
-    let mut t = (b * s + f) / e;
-    if t < 0.0 {
-        t = 0.0;
-        s = (-c / a).clamp(0.0, 1.0);
-    } else if t > 1.0 {
-        t = 1.0;
-        s = ((b - c) / a).clamp(0.0, 1.0);
-    }
-    (s, t)
+    crate::solver::awt::collide::closest_segment_params(p1, p2, q1, q2)
 }
 
 /// The point of triangle `t` closest to `p`, and its barycentric weights (Ericson, §5.1.5).
