@@ -9,6 +9,7 @@
 //! cli         arguments → option structs, exit codes
 //! bench       the §5.2 table and the other benchmarks
 //! app         run: simulation, logging threads, keys, reload, stop
+//! web         the control page beside the web viewer (run --web)
 //! stream      the only Rerun code: sinks, entity paths, blueprint, Logger
 //! experiment  the papers' experiments, each a few solvers and a number
 //! pipeline    stepping a frame, filling a Frame from a solver
@@ -39,3 +40,4 @@ pub mod scene;
 pub mod solver;
 pub mod stream;
 pub mod style;
+pub mod web;

@@ -231,6 +231,13 @@ pub fn fill_stats(frame: &mut Frame, params: &crate::style::SimParams) {
     push(p::DROPPED_FRAMES, frame.dropped_frames as f64);
     push(p::SPLIT_THRESHOLD, params.split_threshold);
     push(p::MERGE_VELOCITY, params.merge_velocity);
+    push(p::FRICTION, params.friction);
+    push(p::REPULSION, params.repulsion);
+    let w = params.wind.velocity;
+    push(
+        p::WIND_SPEED,
+        (w[0] * w[0] + w[1] * w[1] + w[2] * w[2]).sqrt(),
+    );
 }
 
 #[cfg(test)]

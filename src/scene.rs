@@ -73,6 +73,15 @@ impl Scene {
         }
     }
 
+    /// The same scene under another motion (a preset name or a keyframed `.ron` file).
+    pub fn with_motion(&self, spec: &str) -> anyhow::Result<Scene> {
+        Ok(Scene {
+            motion_spec: spec.to_owned(),
+            motion: Motion::parse(spec, Point3::from(self.model.scalp_center))?,
+            ..self.clone()
+        })
+    }
+
     /// A fresh solver with the style's own parameters.
     pub fn solver(&self) -> Box<dyn Solver> {
         self.solver_with(&self.loaded.style.sim)

@@ -70,6 +70,7 @@ fn args(style: &Path, out: &Path, seconds: f64, watch: bool) -> RunOptions {
         watch: Some(watch),
         sink: SinkChoice::Save(out.to_path_buf()),
         render: None,
+        web: None,
     }
 }
 

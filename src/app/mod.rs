@@ -14,9 +14,9 @@ pub mod stop;
 pub mod threads;
 pub mod tune;
 
-pub use run::{run, run_with, simulate_into, RunOptions, RunSummary};
+pub use run::{run, run_with, simulate_into, RunOptions, RunSummary, WebOptions};
 pub use stop::{stop_on_ctrl_c, StopSignal};
-pub use threads::LoopOptions;
+pub use threads::{LoopOptions, WebLink};
 
 /// Catmull-Rom points per span between two cross-sections of a drawn strand.
 pub const STRAND_SUBDIVISIONS: usize = 2;

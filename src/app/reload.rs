@@ -13,7 +13,7 @@ use crate::style::LoadedStyle;
 /// Reads the watched style again and tells the simulation thread what to do: new parameters in
 /// place, or a restart on a new model; an edit that does not load is reported and ignored.
 pub fn handle_reload(
-    scene: &Scene,
+    scene: &mut Scene,
     file_style: &mut LoadedStyle,
     ctl: &Sender<Control>,
     notes: &Sender<(MessageLevel, String)>,
@@ -51,6 +51,7 @@ pub fn handle_reload(
                         "{}: the model changed (head, hair, hierarchy, link, seed, total mass or a model section); restarting the simulation",
                         path.display()
                     );
+                    *scene = new_scene.clone();
                     let _ = ctl.send(Control::Rebuild(Box::new(new_scene), msg));
                     *file_style = loaded;
                 }

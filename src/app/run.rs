@@ -29,8 +29,10 @@ use crate::style::builtin::StyleSource;
 
 use super::console::Console;
 use super::stop::{stop_on_ctrl_c, StopSignal};
-use super::threads::{simulate, LoopOptions};
+use super::threads::{simulate, LoopOptions, WebLink};
 use super::tune;
+use crate::web::{ControlPage, PageConfig, SharedState};
+use std::sync::Arc;
 
 /// The style used when `--style` is not given: the built-in Long style.
 pub const DEFAULT_STYLE: &str = "long";
@@ -62,6 +64,20 @@ pub struct RunOptions {
     pub sink: SinkChoice,
     /// Render the hair beside the debug view at this size; `None`: off (`--no-render`).
     pub render: Option<(u32, u32)>,
+    /// Serve the control page and the web viewer (`--web`); the sink is then
+    /// [`SinkChoice::Web`].
+    pub web: Option<WebOptions>,
+}
+
+/// `--web [--port P] [--bind IP] [--open]`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct WebOptions {
+    /// The address the page, the web viewer and the gRPC server bind.
+    pub bind: std::net::IpAddr,
+    /// The page's port (0: a free one).
+    pub port: u16,
+    /// Open the page in the default browser.
+    pub open: bool,
 }
 
 impl Default for RunOptions {
@@ -75,6 +91,7 @@ impl Default for RunOptions {
             watch: None,
             sink: SinkChoice::Auto,
             render: Some(super::render_thread::DEFAULT_RENDER_SIZE),
+            web: None,
         }
     }
 }
@@ -122,7 +139,15 @@ pub fn run_with(opts: RunOptions, stop: StopSignal) -> anyhow::Result<RunSummary
     for w in scene.warnings() {
         console.say(&format!("warning: {w}"));
     }
-    let sink = sink::open_sink(&opts.sink)?;
+    let mut sink = sink::open_sink(&opts.sink)?;
+    // The page's servers live until the run returns (the viewer's with `_page`).
+    let (_page, web) = match (sink.web.take(), &opts.web) {
+        (Some(viewer), Some(w)) => {
+            let (page, link) = start_page(&scene, viewer, w, &console)?;
+            (Some(page), Some(link))
+        }
+        _ => (None, None),
+    };
     let seconds = match (opts.seconds, sink.live) {
         (Some(s), _) => Some(s),
         (None, true) => None,
@@ -145,11 +170,63 @@ pub fn run_with(opts: RunOptions, stop: StopSignal) -> anyhow::Result<RunSummary
         progress: sink.file.is_some(),
         strands: opts.strands,
         render: opts.render,
+        web,
     };
     let file = sink.file.clone();
     let summary = simulate(&scene, sink, &loop_opts, &stop)?;
     report_end(&console, &summary, file.as_deref());
     Ok(summary)
+}
+
+/// Starts the control page beside the web viewer and says where they are.
+fn start_page(
+    scene: &Scene,
+    viewer: sink::WebViewer,
+    w: &WebOptions,
+    console: &Console,
+) -> anyhow::Result<((ControlPage, sink::WebViewer), WebLink)> {
+    let mut motions: Vec<String> = crate::motion::Motion::preset_names()
+        .iter()
+        .map(|m| (*m).to_owned())
+        .collect();
+    if !motions.contains(&scene.motion_spec) {
+        motions.push(scene.motion_spec.clone());
+    }
+    let models = SolverKind::ALL
+        .iter()
+        .map(|k| k.name().to_owned())
+        .collect();
+    let shared = Arc::new(SharedState::new(models, motions));
+    let (tx, rx) = crossbeam_channel::unbounded();
+    let page = ControlPage::start(
+        PageConfig {
+            bind: w.bind,
+            port: w.port,
+            viewer_port: viewer.viewer_port,
+            grpc_port: viewer.grpc_port,
+        },
+        Arc::clone(&shared),
+        tx,
+    )?;
+    let url = page.url();
+    console.say(&format!(
+        "control page: {url}\n    Rerun web viewer on port {}, gRPC server on port {} (all on {})",
+        viewer.viewer_port, viewer.grpc_port, w.bind
+    ));
+    if w.open {
+        if let Err(e) = webbrowser::open(&url) {
+            console.say(&format!(
+                "could not open a browser ({e}); open {url} yourself"
+            ));
+        }
+    }
+    Ok((
+        (page, viewer),
+        WebLink {
+            shared,
+            commands: rx,
+        },
+    ))
 }
 
 /// Runs the simulation into `rec` (no viewer to watch) until `opts.seconds` are simulated or

@@ -1,6 +1,7 @@
 //! The simulation thread: steps the solver frame by frame, fills frames and hands them to the
 //! logger, applies parameter changes, pauses and restarts.
 
+use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use crossbeam_channel::{Receiver, Sender, TrySendError};
@@ -12,7 +13,9 @@ use crate::frame::Frame;
 use crate::pipeline::{self, FrameBuilder};
 use crate::scene::Scene;
 use crate::solver::Solver;
-use crate::style::SimParams;
+use crate::style::{SimParams, Wind};
+use crate::web::Param;
+use crate::web::{Controls, ParamValues, SharedState};
 
 /// Poll period while paused.
 const PAUSE_POLL: Duration = Duration::from_millis(25);
@@ -27,6 +30,13 @@ pub enum Control {
     Rebuild(Box<Scene>, String),
     /// A key the main thread does not handle itself.
     Key(KeyAction),
+    /// One parameter set on the control page (checked there).
+    Set(Param, f64),
+    /// Pause (`true`) or resume, from the control page.
+    Pause(bool),
+    /// Restart on another scene (motion or model chosen on the page) with the parameters in
+    /// force.
+    Switch(Box<Scene>, String),
 }
 
 /// What the simulation thread did.
@@ -64,6 +74,8 @@ pub struct SimThread {
     pub tx: Sender<Frame>,
     /// Emptied frames back from the logger.
     pub free: Receiver<Frame>,
+    /// What the control pages show (`run --web`), published every frame.
+    pub shared: Option<Arc<SharedState>>,
 }
 
 /// The state of the loop that a control message may change.
@@ -76,6 +88,9 @@ struct LoopState {
     paused: bool,
     time_offset: f64,
     out: SimOutcome,
+    /// The control page's wind strength in force, and the wind it scales.
+    wind_strength: f64,
+    base_wind: Wind,
 }
 
 impl SimThread {
@@ -91,6 +106,8 @@ impl SimThread {
             paused: false,
             time_offset: 0.0,
             out: SimOutcome::default(),
+            wind_strength: tune::initial_wind_strength(&self.scene.loaded.style.sim.wind),
+            base_wind: tune::base_wind(&self.scene.loaded.style.sim.wind),
         };
         say_ignored(&*st.solver, console, &mut st.messages);
         let mut report = st.solver.new_report();
@@ -107,6 +124,7 @@ impl SimThread {
                 origin_index = index;
                 report = st.solver.new_report();
             }
+            self.publish(&st);
             if st.paused {
                 std::thread::sleep(PAUSE_POLL);
                 origin = Instant::now();
@@ -152,33 +170,60 @@ impl SimThread {
         let mut any = false;
         while let Ok(c) = self.ctl.try_recv() {
             any = true;
+            let shared = self.shared.clone();
             let say = |msg: String, st: &mut LoopState| {
                 console.say(&msg);
+                if let Some(s) = &shared {
+                    s.log(&msg);
+                }
                 st.messages.push(msg);
             };
             match c {
                 Control::Params(p, msg) => {
+                    st.wind_strength = tune::initial_wind_strength(&p.wind);
+                    st.base_wind = tune::base_wind(&p.wind);
                     st.solver.set_params(&p);
                     say(msg, st);
                 }
+                Control::Set(param, value) => {
+                    let mut p = st.solver.params().clone();
+                    let msg = tune::apply_param(
+                        &mut p,
+                        &mut st.wind_strength,
+                        &st.base_wind,
+                        param,
+                        value,
+                    );
+                    st.solver.set_params(&p);
+                    say(msg, st);
+                }
+                Control::Pause(paused) => {
+                    if st.paused != paused {
+                        st.paused = paused;
+                        say(
+                            (if paused {
+                                "paused (web page)"
+                            } else {
+                                "resumed (web page)"
+                            })
+                            .to_owned(),
+                            st,
+                        );
+                    }
+                }
+                Control::Switch(s, msg) => {
+                    say(msg, st);
+                    let params = st.solver.params().clone();
+                    self.replace_scene(st, *s);
+                    st.solver = self.scene.solver_with(&params);
+                }
                 Control::Rebuild(s, msg) => {
                     say(msg, st);
-                    st.time_offset += st.solver.time();
-                    self.scene = *s;
+                    self.replace_scene(st, *s);
                     st.solver = self.scene.solver();
-                    st.builder = FrameBuilder::new(
-                        &self.scene.model,
-                        self.strands,
-                        super::STRAND_SUBDIVISIONS,
-                    );
-                    if st.render_builder.is_some() {
-                        st.render_builder = Some(FrameBuilder::new(
-                            &self.scene.model,
-                            usize::MAX,
-                            super::STRAND_SUBDIVISIONS,
-                        ));
-                    }
-                    st.out.restarts += 1;
+                    st.wind_strength =
+                        tune::initial_wind_strength(&self.scene.loaded.style.sim.wind);
+                    st.base_wind = tune::base_wind(&self.scene.loaded.style.sim.wind);
                 }
                 Control::Key(KeyAction::TogglePause) => {
                     st.paused = !st.paused;
@@ -192,7 +237,10 @@ impl SimThread {
                     st.time_offset += st.solver.time();
                     let params = st.solver.params().clone();
                     st.solver = self.scene.solver_with(&params);
-                    say("restarted the simulation (key)".to_owned(), st);
+                    say(
+                        "restarted the simulation with the parameters in force".to_owned(),
+                        st,
+                    );
                     st.out.restarts += 1;
                 }
                 Control::Key(a) => {
@@ -205,6 +253,44 @@ impl SimThread {
             }
         }
         any
+    }
+
+    /// Moves to a new scene (the caller builds its solver): the time goes on, the frame
+    /// builders follow the new model, and it counts as a restart.
+    fn replace_scene(&mut self, st: &mut LoopState, scene: Scene) {
+        st.time_offset += st.solver.time();
+        self.scene = scene;
+        st.builder = FrameBuilder::new(&self.scene.model, self.strands, super::STRAND_SUBDIVISIONS);
+        if st.render_builder.is_some() {
+            st.render_builder = Some(FrameBuilder::new(
+                &self.scene.model,
+                usize::MAX,
+                super::STRAND_SUBDIVISIONS,
+            ));
+        }
+        st.out.restarts += 1;
+    }
+
+    /// Tells the control pages what is in force.
+    fn publish(&self, st: &LoopState) {
+        let Some(shared) = &self.shared else { return };
+        let p = st.solver.params();
+        shared.publish(
+            Controls {
+                paused: st.paused,
+                model: st.solver.kind().name(),
+                motion: &self.scene.motion_spec,
+                params: ParamValues {
+                    split_threshold: p.split_threshold,
+                    merge_velocity: p.merge_velocity,
+                    friction: p.friction,
+                    repulsion: p.repulsion,
+                    wind: st.wind_strength,
+                },
+                dt: st.solver.dt(),
+            },
+            st.time_offset + st.solver.time(),
+        );
     }
 }
 

@@ -20,6 +20,7 @@ use crate::frame::Frame;
 use crate::scene::Scene;
 use crate::stream::sink::{OpenSink, SinkWatcher, ViewerStatus};
 use crate::stream::{LoggerSetup, MessageLevel};
+use crate::web::{SharedState, WebCommand};
 
 /// Frames queued between the simulation and the logger. Small: live, a long queue is latency.
 const QUEUE_FRAMES: usize = 3;
@@ -50,6 +51,17 @@ pub struct LoopOptions {
     pub strands: usize,
     /// Render every frame at this size (width, height) on a render thread; `None`: off.
     pub render: Option<(u32, u32)>,
+    /// The control page's requests and the state it shows (`run --web`).
+    pub web: Option<WebLink>,
+}
+
+/// What connects a run to its control page.
+#[derive(Debug, Clone)]
+pub struct WebLink {
+    /// The state the simulation thread publishes for the pages.
+    pub shared: Arc<SharedState>,
+    /// The pages' checked requests.
+    pub commands: Receiver<WebCommand>,
 }
 
 /// The two worker threads and the channels the main thread keeps.
@@ -221,6 +233,7 @@ fn start_workers(
         ctl: ctl_rx,
         tx: frame_tx,
         free: free_rx,
+        shared: opts.web.as_ref().map(|w| Arc::clone(&w.shared)),
     };
     let sim = {
         let stop = stop.clone();
@@ -273,6 +286,8 @@ fn watch_run(
         _ => None,
     };
     let mut file_style = scene.loaded.clone();
+    // The scene in force: a motion or model chosen on the control page, or a reloaded model.
+    let mut current = scene.clone();
     let mut key_error_reported = false;
     let mut never_connected: Option<String> = None;
     while !stop.is_stopped() && !w.sim.is_finished() {
@@ -299,7 +314,19 @@ fn watch_run(
             std::thread::sleep(POLL);
         }
         if watcher.as_mut().is_some_and(|w| w.poll()) {
-            handle_reload(scene, &mut file_style, &w.ctl, &w.notes, console, summary);
+            handle_reload(
+                &mut current,
+                &mut file_style,
+                &w.ctl,
+                &w.notes,
+                console,
+                summary,
+            );
+        }
+        if let Some(web) = &opts.web {
+            while let Ok(cmd) = web.commands.try_recv() {
+                web_command(cmd, &mut current, &w.ctl, &web.shared, console);
+            }
         }
         let lost = match viewer.status() {
             ViewerStatus::Gone(why) => Some(why),
@@ -327,4 +354,40 @@ fn watch_run(
         }
     }
     never_connected
+}
+
+/// Turns a control page's request into what the simulation thread does: the same [`Control`]
+/// messages as the keys and the style reload. A motion or model change is a restart on a new
+/// scene, which becomes the one in force.
+fn web_command(
+    cmd: WebCommand,
+    current: &mut Scene,
+    ctl: &Sender<Control>,
+    shared: &SharedState,
+    console: &Console,
+) {
+    let control = match cmd {
+        WebCommand::Set(param, value) => Control::Set(param, value),
+        WebCommand::Pause(paused) => Control::Pause(paused),
+        WebCommand::Restart => Control::Key(KeyAction::Restart),
+        WebCommand::Motion(spec) => match current.with_motion(&spec) {
+            Ok(s) => {
+                *current = s;
+                let msg = format!("motion `{spec}` (web page); restarting the simulation");
+                Control::Switch(Box::new(current.clone()), msg)
+            }
+            Err(e) => {
+                let msg = format!("motion `{spec}` not applied: {e}");
+                console.say(&msg);
+                shared.log(&msg);
+                return;
+            }
+        },
+        WebCommand::Model(kind) => {
+            *current = current.with_solver(kind);
+            let msg = format!("model `{kind}` (web page); restarting the simulation");
+            Control::Switch(Box::new(current.clone()), msg)
+        }
+    };
+    let _ = ctl.send(control);
 }

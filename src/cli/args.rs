@@ -3,7 +3,7 @@
 
 use std::path::PathBuf;
 
-use crate::app::run::{RunOptions, DEFAULT_MOTION, DEFAULT_STRANDS, DEFAULT_STYLE};
+use crate::app::run::{RunOptions, WebOptions, DEFAULT_MOTION, DEFAULT_STRANDS, DEFAULT_STYLE};
 use crate::solver::SolverKind;
 use crate::stream::sink::{SinkChoice, DEFAULT_CONNECT_URL};
 
@@ -60,6 +60,34 @@ pub struct RunArgs {
     /// Where the recording goes.
     #[command(flatten)]
     pub sink: SinkArgs,
+
+    /// The control page (`--web`).
+    #[command(flatten)]
+    pub web: WebArgs,
+}
+
+/// `--web` and its options: a page of controls beside the Rerun web viewer.
+#[derive(Debug, Clone, clap::Args)]
+pub struct WebArgs {
+    /// Serve a control page (sliders for the thresholds, friction, repulsion and wind, motion
+    /// and model choices, pause and restart) beside the Rerun web viewer, which shows the run
+    /// live. Prints the page's URL. Instead of a native viewer or a file.
+    #[arg(long, conflicts_with_all = ["spawn", "connect", "save", "stdout"])]
+    pub web: bool,
+
+    /// The control page's port (0: a free one). The web viewer and gRPC server always take
+    /// free ports, printed at start.
+    #[arg(long, value_name = "P", default_value_t = 0, requires = "web")]
+    pub port: u16,
+
+    /// The address the page, the web viewer and the gRPC server listen on. Only 127.0.0.1 (this
+    /// machine) by default; another address lets other machines control the run.
+    #[arg(long, value_name = "IP", default_value = "127.0.0.1", requires = "web")]
+    pub bind: std::net::IpAddr,
+
+    /// Open the control page in the default browser.
+    #[arg(long, requires = "web")]
+    pub open: bool,
 }
 
 impl RunArgs {
@@ -80,8 +108,17 @@ impl RunArgs {
                 (_, true) => Some(false),
                 _ => None,
             },
-            sink: self.sink.choice(),
+            sink: if self.web.web {
+                SinkChoice::Web(self.web.bind)
+            } else {
+                self.sink.choice()
+            },
             render: (!self.no_render).then_some(self.render_size),
+            web: self.web.web.then(|| WebOptions {
+                bind: self.web.bind,
+                port: self.web.port,
+                open: self.web.open,
+            }),
         }
     }
 }

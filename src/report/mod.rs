@@ -41,6 +41,12 @@ pub mod paths {
     pub const SPLIT_THRESHOLD: &str = "/params/split_threshold";
     /// The merge velocity threshold in force, m/s.
     pub const MERGE_VELOCITY: &str = "/params/merge_velocity";
+    /// Friction α in force, s⁻¹.
+    pub const FRICTION: &str = "/params/friction";
+    /// Repulsion k_r in force, s⁻².
+    pub const REPULSION: &str = "/params/repulsion";
+    /// Mean wind speed in force, m/s.
+    pub const WIND_SPEED: &str = "/params/wind_speed";
 }
 
 /// Which adaptation happened.

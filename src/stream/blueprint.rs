@@ -54,7 +54,14 @@ const COLLISION_CONTENTS: &[&str] = &[
     "- /stats/step_ms",
     "- /stats/dropped_frames",
 ];
-const ENERGY_CONTENTS: &[&str] = &["+ /stats/kinetic_energy", "+ /params/**"];
+/// The thresholds share the energy's small scale; friction (≈ 30) and repulsion (≈ 2000) would
+/// flatten both, so they stay out of the plots (still in the recording, under `/params`).
+const ENERGY_CONTENTS: &[&str] = &[
+    "+ /stats/kinetic_energy",
+    "+ /params/split_threshold",
+    "+ /params/merge_velocity",
+    "+ /params/wind_speed",
+];
 /// Milliseconds per step (1–10) would flatten the energy (J, ≪ 1) and the thresholds.
 const TIMING_CONTENTS: &[&str] = &["+ /stats/step_ms", "+ /stats/dropped_frames"];
 const LOG_CONTENTS: &[&str] = &["+ /events/**", "+ /log"];

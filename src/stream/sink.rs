@@ -38,6 +38,8 @@ pub enum SinkChoice {
     Save(PathBuf),
     /// Standard output (`wisptree -o | rerun -`).
     Stdout,
+    /// A gRPC server and the Rerun web viewer, both on this address (`run --web`).
+    Web(std::net::IpAddr),
 }
 
 /// Whether a live viewer is still there.
@@ -81,6 +83,22 @@ pub struct OpenSink {
     pub fell_back: bool,
     /// Connection state of a live viewer.
     grpc: Option<Arc<GrpcSink>>,
+    /// The web viewer and gRPC server of [`SinkChoice::Web`].
+    pub web: Option<WebViewer>,
+}
+
+/// The servers of [`SinkChoice::Web`]: the gRPC server the recording streams to and the web
+/// viewer that reads it. The web viewer stops when this is dropped; the gRPC server when the
+/// recording is.
+pub struct WebViewer {
+    /// The address both listen on.
+    pub bind: std::net::IpAddr,
+    /// The gRPC server's port.
+    pub grpc_port: u16,
+    /// The web viewer's port.
+    pub viewer_port: u16,
+    /// (Rerun's `WebViewerServer`, which the SDK does not re-export by name.)
+    _server: Box<dyn std::any::Any + Send>,
 }
 
 /// A recording stream, opaque outside `stream`.
@@ -115,6 +133,7 @@ impl OpenSink {
             description: "recording".to_owned(),
             fell_back: false,
             grpc: None,
+            web: None,
         }
     }
 
@@ -152,6 +171,7 @@ impl SinkWatcher {
             description: String::new(),
             fell_back: false,
             grpc: self.0.clone(),
+            web: None,
         }
         .viewer_status()
     }
@@ -202,6 +222,7 @@ pub fn open_sink(choice: &SinkChoice) -> anyhow::Result<OpenSink> {
         description,
         fell_back: false,
         grpc: None,
+        web: None,
     };
     let live = |rec, grpc, description| OpenSink {
         rec: Recording(rec),
@@ -210,6 +231,7 @@ pub fn open_sink(choice: &SinkChoice) -> anyhow::Result<OpenSink> {
         description,
         fell_back: false,
         grpc: Some(grpc),
+        web: None,
     };
     match choice {
         SinkChoice::Stdout => {
@@ -223,6 +245,7 @@ pub fn open_sink(choice: &SinkChoice) -> anyhow::Result<OpenSink> {
             Some(path.clone()),
             format!("file {}", path.display()),
         )),
+        SinkChoice::Web(bind) => serve_web(*bind),
         SinkChoice::Connect(url) => {
             let (rec, grpc) = connect(url)?;
             Ok(live(rec, grpc, format!("viewer at {url}")))
@@ -245,6 +268,87 @@ pub fn open_sink(choice: &SinkChoice) -> anyhow::Result<OpenSink> {
             }
         },
     }
+}
+
+/// How long the gRPC server may take to listen.
+const GRPC_START_TIMEOUT: Duration = Duration::from_secs(5);
+
+/// [`SinkChoice::Web`]: a gRPC server on a free port of `bind` that keeps the recording for
+/// viewers that connect late, and the Rerun web viewer on another free port. Both would bind
+/// 0.0.0.0 by default; here they bind what the user chose (127.0.0.1 unless `--bind`).
+fn serve_web(bind: std::net::IpAddr) -> anyhow::Result<OpenSink> {
+    let grpc_port = free_port(bind)?;
+    let mut options = rerun::ServerOptions {
+        memory_limit: rerun::MemoryLimit::from_fraction_of_total(0.25),
+        ..Default::default()
+    };
+    if !bind.is_loopback() {
+        // The viewer's page is then reached by another name than localhost / 127.0.0.1.
+        options.cors_allowed_origins.push("http://*".to_owned());
+    }
+    let rec = rerun::RecordingStreamBuilder::new(APP_ID)
+        .serve_grpc_opts(bind.to_string(), grpc_port, options)
+        .with_context(|| format!("starting the gRPC server on {bind}:{grpc_port}"))?;
+    wait_listening(
+        SocketAddr::new(loopback_for(bind), grpc_port),
+        GRPC_START_TIMEOUT,
+    )
+    .with_context(|| format!("the gRPC server on {bind}:{grpc_port} did not start"))?;
+    let server = rerun::serve_web_viewer(rerun::web_viewer::WebViewerConfig {
+        bind_ip: bind.to_string(),
+        open_browser: false,
+        ..Default::default()
+    })
+    .with_context(|| format!("starting the Rerun web viewer on {bind}"))?;
+    let viewer_port = server
+        .server_url()
+        .rsplit(':')
+        .next()
+        .and_then(|p| p.trim_end_matches('/').parse().ok())
+        .context("the web viewer did not say its port")?;
+    Ok(OpenSink {
+        rec: Recording(rec),
+        live: true,
+        file: None,
+        description: format!("web viewer on {bind}:{viewer_port} (gRPC {bind}:{grpc_port})"),
+        fell_back: false,
+        grpc: None,
+        web: Some(WebViewer {
+            bind,
+            grpc_port,
+            viewer_port,
+            _server: Box::new(server),
+        }),
+    })
+}
+
+/// A port of `bind` that is free now (the OS picks it; it is released at once for the server
+/// that takes it next, so another program could take it first: the start then fails clearly).
+fn free_port(bind: std::net::IpAddr) -> anyhow::Result<u16> {
+    let l = std::net::TcpListener::bind(SocketAddr::new(bind, 0))
+        .with_context(|| format!("no free port on {bind}"))?;
+    Ok(l.local_addr()?.port())
+}
+
+/// The address to reach a server bound to `bind` from this machine.
+fn loopback_for(bind: std::net::IpAddr) -> std::net::IpAddr {
+    if bind.is_unspecified() {
+        std::net::IpAddr::from([127, 0, 0, 1])
+    } else {
+        bind
+    }
+}
+
+/// Waits until something accepts connections at `addr`.
+fn wait_listening(addr: SocketAddr, timeout: Duration) -> anyhow::Result<()> {
+    let start = Instant::now();
+    while start.elapsed() < timeout {
+        if TcpStream::connect_timeout(&addr, Duration::from_millis(200)).is_ok() {
+            return Ok(());
+        }
+        std::thread::sleep(Duration::from_millis(50));
+    }
+    anyhow::bail!("nothing listens at {addr} after {} s", timeout.as_secs())
 }
 
 /// Starts a viewer (`rerun` on PATH) listening on the default port, or finds one already

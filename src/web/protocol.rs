@@ -1,0 +1,452 @@
+//! What the control page and the program say to each other: the tunable parameters and their
+//! ranges, the few requests the page may send (checked here, before anything reaches the
+//! simulation), and the live state every open page shows.
+//!
+//! The page builds its sliders from [`PARAMS`], so the ranges are written once.
+
+use std::collections::VecDeque;
+use std::sync::Mutex;
+
+use serde::{Deserialize, Serialize};
+
+use crate::solver::SolverKind;
+
+/// A parameter the page can set.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Param {
+    /// The split threshold on |acceleration| × radius (AWT §3.1), N·m·kg⁻¹.
+    SplitThreshold,
+    /// The merge velocity threshold (AWT §3.2), m/s.
+    MergeVelocity,
+    /// Friction α of hair–hair interaction (AWT §4.2), s⁻¹; α·dt must stay < 1.
+    Friction,
+    /// Repulsion k_r between segments crossing at a large angle (AWT §4.2), s⁻².
+    Repulsion,
+    /// Wind strength: a factor on the style's wind, or m/s along +x when the style has none.
+    Wind,
+}
+
+/// A slider: its parameter, what the page calls it, and its range.
+#[derive(Debug, Clone, Copy, Serialize)]
+pub struct ParamSpec {
+    /// The name in requests and in the state (`split_threshold`, …).
+    pub name: &'static str,
+    /// Which parameter.
+    #[serde(skip)]
+    pub param: Param,
+    /// The label beside the slider.
+    pub label: &'static str,
+    /// The unit shown after the value.
+    pub unit: &'static str,
+    /// Smallest accepted value.
+    pub min: f64,
+    /// Largest accepted value.
+    pub max: f64,
+    /// The slider moves on a log scale.
+    pub log: bool,
+}
+
+/// Every parameter the page can set, in the order it shows them.
+pub const PARAMS: &[ParamSpec] = &[
+    ParamSpec {
+        name: "split_threshold",
+        param: Param::SplitThreshold,
+        label: "split threshold",
+        unit: "N·m·kg⁻¹",
+        min: 0.05,
+        max: 1.0,
+        log: true,
+    },
+    ParamSpec {
+        name: "merge_velocity",
+        param: Param::MergeVelocity,
+        label: "merge velocity threshold",
+        unit: "m/s",
+        min: 0.005,
+        max: 1.0,
+        log: true,
+    },
+    ParamSpec {
+        name: "friction",
+        param: Param::Friction,
+        label: "friction α",
+        unit: "s⁻¹",
+        min: 0.0,
+        max: 1000.0,
+        log: false,
+    },
+    ParamSpec {
+        name: "repulsion",
+        param: Param::Repulsion,
+        label: "repulsion k_r",
+        unit: "s⁻²",
+        min: 0.0,
+        max: 20000.0,
+        log: false,
+    },
+    ParamSpec {
+        name: "wind",
+        param: Param::Wind,
+        label: "wind strength",
+        unit: "×",
+        min: 0.0,
+        max: 5.0,
+        log: false,
+    },
+];
+
+impl Param {
+    /// Its slider.
+    pub fn spec(self) -> &'static ParamSpec {
+        PARAMS
+            .iter()
+            .find(|s| s.param == self)
+            .expect("every parameter has a spec")
+    }
+}
+
+/// A request as the page sends it (JSON, `type` names the kind). Anything else is refused.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
+pub enum WebRequest {
+    /// Set one parameter. The value stays untyped here so that a non-number is refused with its
+    /// own message.
+    Set {
+        /// A name from [`PARAMS`].
+        param: String,
+        /// The new value.
+        value: serde_json::Value,
+    },
+    /// Pause (`true`) or resume.
+    Pause {
+        /// Paused after the request.
+        paused: bool,
+    },
+    /// Restart the simulation with the parameters in force.
+    Restart,
+    /// Restart under another motion preset.
+    Motion {
+        /// A preset name.
+        name: String,
+    },
+    /// Restart with another hair model.
+    Model {
+        /// A model name (`awt`, `single-level`, …).
+        name: String,
+    },
+}
+
+/// A checked request: what the simulation is asked to do.
+#[derive(Debug, Clone, PartialEq)]
+pub enum WebCommand {
+    /// Set a parameter to a value inside its range.
+    Set(Param, f64),
+    /// Pause or resume.
+    Pause(bool),
+    /// Restart with the parameters in force.
+    Restart,
+    /// Restart under this motion preset.
+    Motion(String),
+    /// Restart with this model.
+    Model(SolverKind),
+}
+
+/// Parses and checks one request body against the state in force (the time step bounds the
+/// friction). The error is the message the page shows.
+pub fn parse_request(body: &str, state: &LiveState) -> Result<WebCommand, String> {
+    let req: WebRequest =
+        serde_json::from_str(body).map_err(|e| format!("not a request this page sends: {e}"))?;
+    check_request(req, state)
+}
+
+/// Checks a parsed request (see [`parse_request`]).
+pub fn check_request(req: WebRequest, state: &LiveState) -> Result<WebCommand, String> {
+    match req {
+        WebRequest::Set { param, value } => {
+            let spec = PARAMS
+                .iter()
+                .find(|s| s.name == param)
+                .ok_or_else(|| format!("no parameter `{param}`"))?;
+            let v = value
+                .as_f64()
+                .filter(|v| v.is_finite())
+                .ok_or_else(|| format!("{}: `{value}` is not a number", spec.label))?;
+            if !(spec.min..=spec.max).contains(&v) {
+                return Err(format!(
+                    "{} {v} refused: it must be between {} and {} {}",
+                    spec.label, spec.min, spec.max, spec.unit
+                ));
+            }
+            if spec.param == Param::Friction && v * state.dt >= 1.0 {
+                return Err(format!(
+                    "friction α {v} refused: α·dt must stay below 1 so friction never reverses a \
+                     relative motion (AWT §4.2); with dt = {} s, α·dt = {:.3}",
+                    state.dt,
+                    v * state.dt
+                ));
+            }
+            Ok(WebCommand::Set(spec.param, v))
+        }
+        WebRequest::Pause { paused } => Ok(WebCommand::Pause(paused)),
+        WebRequest::Restart => Ok(WebCommand::Restart),
+        WebRequest::Motion { name } => {
+            if state.motions.iter().any(|m| *m == name) {
+                Ok(WebCommand::Motion(name))
+            } else {
+                Err(format!(
+                    "no motion `{name}` (known: {})",
+                    state.motions.join(", ")
+                ))
+            }
+        }
+        WebRequest::Model { name } => SolverKind::parse(&name).map(WebCommand::Model),
+    }
+}
+
+/// The values the page shows for each parameter.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
+pub struct ParamValues {
+    /// See [`Param::SplitThreshold`].
+    pub split_threshold: f64,
+    /// See [`Param::MergeVelocity`].
+    pub merge_velocity: f64,
+    /// See [`Param::Friction`].
+    pub friction: f64,
+    /// See [`Param::Repulsion`].
+    pub repulsion: f64,
+    /// See [`Param::Wind`].
+    pub wind: f64,
+}
+
+/// One line of the run's log, as the page lists it.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct LogLine {
+    /// Counts up over the run (the page shows each line once).
+    pub seq: u64,
+    /// The text, as logged to `/log`.
+    pub text: String,
+}
+
+/// Lines kept for pages that open late.
+const LOG_LINES: usize = 50;
+
+/// What every open page shows, published by the simulation thread.
+#[derive(Debug, Clone, Default, PartialEq, Serialize)]
+pub struct LiveState {
+    /// Counts changes of anything but the time, so a page knows when to refresh its controls.
+    pub version: u64,
+    /// Simulated time, s.
+    pub sim_time: f64,
+    /// Paused.
+    pub paused: bool,
+    /// The model in force (`awt`, …).
+    pub model: String,
+    /// The motion in force.
+    pub motion: String,
+    /// The parameters in force.
+    pub params: ParamValues,
+    /// The integration step, s (friction must keep α·dt < 1).
+    pub dt: f64,
+    /// The models the page offers.
+    pub models: Vec<String>,
+    /// The motion presets the page offers.
+    pub motions: Vec<String>,
+    /// The latest lines of the run's log.
+    pub log: VecDeque<LogLine>,
+}
+
+/// The state shared by the simulation thread (writer) and the page server (reader).
+#[derive(Debug, Default)]
+pub struct SharedState {
+    state: Mutex<LiveState>,
+}
+
+impl SharedState {
+    /// A state with these choices on offer.
+    pub fn new(models: Vec<String>, motions: Vec<String>) -> SharedState {
+        SharedState {
+            state: Mutex::new(LiveState {
+                models,
+                motions,
+                ..LiveState::default()
+            }),
+        }
+    }
+
+    /// A copy of the state now.
+    pub fn snapshot(&self) -> LiveState {
+        self.lock().clone()
+    }
+
+    /// Publishes the controls' values; the version moves only if one changed.
+    pub fn publish(&self, controls: Controls<'_>, sim_time: f64) {
+        let mut s = self.lock();
+        s.sim_time = sim_time;
+        let changed = s.paused != controls.paused
+            || s.model != controls.model
+            || s.motion != controls.motion
+            || s.params != controls.params
+            || s.dt != controls.dt;
+        if changed {
+            s.paused = controls.paused;
+            s.model = controls.model.to_owned();
+            s.motion = controls.motion.to_owned();
+            s.params = controls.params;
+            s.dt = controls.dt;
+            s.version += 1;
+        }
+    }
+
+    /// Adds a line to the log every page lists.
+    pub fn log(&self, text: &str) {
+        let mut s = self.lock();
+        let seq = s.log.back().map_or(1, |l| l.seq + 1);
+        s.log.push_back(LogLine {
+            seq,
+            text: text.to_owned(),
+        });
+        while s.log.len() > LOG_LINES {
+            s.log.pop_front();
+        }
+        s.version += 1;
+    }
+
+    fn lock(&self) -> std::sync::MutexGuard<'_, LiveState> {
+        // A panic elsewhere while holding the lock leaves plain data: keep serving it.
+        self.state.lock().unwrap_or_else(|e| e.into_inner())
+    }
+}
+
+/// The values [`SharedState::publish`] takes.
+#[derive(Debug, Clone, Copy)]
+pub struct Controls<'a> {
+    /// Paused.
+    pub paused: bool,
+    /// The model's name.
+    pub model: &'a str,
+    /// The motion's name.
+    pub motion: &'a str,
+    /// The parameters in force.
+    pub params: ParamValues,
+    /// The integration step, s.
+    pub dt: f64,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn state() -> LiveState {
+        LiveState {
+            dt: 0.01,
+            motions: vec!["still".into(), "lean".into()],
+            ..LiveState::default()
+        }
+    }
+
+    #[test]
+    fn a_value_inside_its_range_is_accepted() {
+        let c = parse_request(
+            r#"{"type":"set","param":"split_threshold","value":0.25}"#,
+            &state(),
+        );
+        assert_eq!(c, Ok(WebCommand::Set(Param::SplitThreshold, 0.25)));
+    }
+
+    #[test]
+    fn out_of_range_values_and_non_numbers_are_refused_naming_the_parameter() {
+        for (body, needle) in [
+            (
+                r#"{"type":"set","param":"split_threshold","value":5}"#,
+                "between 0.05 and 1",
+            ),
+            (
+                r#"{"type":"set","param":"split_threshold","value":0.01}"#,
+                "between",
+            ),
+            (
+                r#"{"type":"set","param":"merge_velocity","value":"fast"}"#,
+                "not a number",
+            ),
+            (
+                r#"{"type":"set","param":"repulsion","value":null}"#,
+                "not a number",
+            ),
+            (
+                r#"{"type":"set","param":"wind","value":-1}"#,
+                "wind strength",
+            ),
+            (
+                r#"{"type":"set","param":"gravity","value":1}"#,
+                "no parameter `gravity`",
+            ),
+        ] {
+            let e = parse_request(body, &state()).unwrap_err();
+            assert!(e.contains(needle), "{body}: {e}");
+        }
+    }
+
+    #[test]
+    fn friction_must_keep_alpha_dt_below_one() {
+        let ok = parse_request(r#"{"type":"set","param":"friction","value":99}"#, &state());
+        assert_eq!(ok, Ok(WebCommand::Set(Param::Friction, 99.0)));
+        let e = parse_request(r#"{"type":"set","param":"friction","value":100}"#, &state())
+            .unwrap_err();
+        assert!(e.contains("α·dt"), "{e}");
+        let mut fine_dt = state();
+        fine_dt.dt = 0.001;
+        let ok = parse_request(r#"{"type":"set","param":"friction","value":500}"#, &fine_dt);
+        assert_eq!(ok, Ok(WebCommand::Set(Param::Friction, 500.0)));
+    }
+
+    #[test]
+    fn only_the_pages_messages_are_taken() {
+        for body in [
+            r#"{"type":"shutdown"}"#,
+            r#"{"type":"restart","now":true}"#,
+            r#"not json"#,
+            r#"{"param":"split_threshold","value":0.2}"#,
+        ] {
+            assert!(parse_request(body, &state()).is_err(), "{body}");
+        }
+        assert_eq!(
+            parse_request(r#"{"type":"pause","paused":true}"#, &state()),
+            Ok(WebCommand::Pause(true))
+        );
+        assert_eq!(
+            parse_request(r#"{"type":"model","name":"single-level"}"#, &state()),
+            Ok(WebCommand::Model(SolverKind::SingleLevel))
+        );
+        assert!(parse_request(r#"{"type":"model","name":"magic"}"#, &state()).is_err());
+        assert_eq!(
+            parse_request(r#"{"type":"motion","name":"lean"}"#, &state()),
+            Ok(WebCommand::Motion("lean".into()))
+        );
+        assert!(parse_request(r#"{"type":"motion","name":"/etc/passwd"}"#, &state()).is_err());
+    }
+
+    #[test]
+    fn the_version_moves_when_a_control_changes_and_not_with_time() {
+        let s = SharedState::new(vec![], vec![]);
+        let c = Controls {
+            paused: false,
+            model: "awt",
+            motion: "lean",
+            params: ParamValues::default(),
+            dt: 0.01,
+        };
+        s.publish(c, 0.0);
+        let v = s.snapshot().version;
+        s.publish(c, 1.0);
+        assert_eq!(s.snapshot().version, v);
+        assert_eq!(s.snapshot().sim_time, 1.0);
+        s.publish(Controls { paused: true, ..c }, 1.0);
+        assert_eq!(s.snapshot().version, v + 1);
+        s.log("hello");
+        assert_eq!(
+            s.snapshot().log.back().map(|l| l.text.as_str()),
+            Some("hello")
+        );
+    }
+}

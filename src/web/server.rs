@@ -1,0 +1,248 @@
+//! The control page's HTTP server: the page itself, the live state as JSON, and one control
+//! endpoint that accepts only the page's own requests from the page's own origin.
+//!
+//! Why so strict: anything on the user's machine (any web page in any tab) can send requests to
+//! a port on 127.0.0.1. A request is taken only when its `Host` names this server (no DNS
+//! rebinding) and, for the control endpoint, its `Origin` is this page and its body is JSON
+//! (a cross-origin page cannot send that without a CORS preflight, which is never answered).
+
+use std::io::Read as _;
+use std::net::{IpAddr, SocketAddr};
+use std::sync::Arc;
+use std::thread::JoinHandle;
+
+use anyhow::Context as _;
+use crossbeam_channel::Sender;
+use tiny_http::{Header, Method, Request, Response, Server};
+
+use super::protocol::{self, SharedState, WebCommand, PARAMS};
+
+/// The largest request body taken (the page's requests are under 100 bytes).
+const MAX_BODY: usize = 4096;
+
+/// The page, with `__VIEWER_PORT__` and `__PARAMS__` filled in when served.
+const PAGE: &str = include_str!("page.html");
+
+/// Where the control page listens and what it embeds.
+#[derive(Debug, Clone)]
+pub struct PageConfig {
+    /// The address to bind (127.0.0.1 unless the user asked otherwise).
+    pub bind: IpAddr,
+    /// The page's port; 0 picks a free one.
+    pub port: u16,
+    /// The port of the Rerun web viewer the page embeds.
+    pub viewer_port: u16,
+    /// The port of the gRPC server the viewer reads from.
+    pub grpc_port: u16,
+}
+
+/// A running control page; stops when dropped.
+pub struct ControlPage {
+    server: Arc<Server>,
+    thread: Option<JoinHandle<()>>,
+    addr: SocketAddr,
+}
+
+impl ControlPage {
+    /// Binds the page's port and serves it on a thread of its own. Checked requests go to
+    /// `commands`; the page reads `state`.
+    pub fn start(
+        cfg: PageConfig,
+        state: Arc<SharedState>,
+        commands: Sender<WebCommand>,
+    ) -> anyhow::Result<ControlPage> {
+        let server = Server::http(SocketAddr::new(cfg.bind, cfg.port))
+            .map_err(|e| anyhow::anyhow!("{e}"))
+            .with_context(|| format!("--port: cannot listen on {}:{}", cfg.bind, cfg.port))?;
+        let addr = server
+            .server_addr()
+            .to_ip()
+            .context("the control page has no IP address")?;
+        let server = Arc::new(server);
+        let serving = Serving {
+            hosts: allowed_hosts(cfg.bind, addr.port()),
+            any_host: cfg.bind.is_unspecified(),
+            page: page_html(&cfg),
+            state,
+            commands,
+        };
+        let thread = {
+            let server = Arc::clone(&server);
+            std::thread::Builder::new()
+                .name("wisptree-web".into())
+                .spawn(move || {
+                    for req in server.incoming_requests() {
+                        serving.handle(req);
+                    }
+                })
+                .context("starting the control page's thread")?
+        };
+        Ok(ControlPage {
+            server,
+            thread: Some(thread),
+            addr,
+        })
+    }
+
+    /// The address it listens on.
+    pub fn addr(&self) -> SocketAddr {
+        self.addr
+    }
+
+    /// The page's URL.
+    pub fn url(&self) -> String {
+        let host = if self.addr.ip().is_unspecified() {
+            IpAddr::from([127, 0, 0, 1])
+        } else {
+            self.addr.ip()
+        };
+        format!("http://{}/", SocketAddr::new(host, self.addr.port()))
+    }
+}
+
+impl Drop for ControlPage {
+    fn drop(&mut self) {
+        self.server.unblock();
+        if let Some(t) = self.thread.take() {
+            let _ = t.join();
+        }
+    }
+}
+
+/// The `Host` values that name this server.
+fn allowed_hosts(bind: IpAddr, port: u16) -> Vec<String> {
+    let mut hosts = vec![SocketAddr::new(bind, port).to_string()];
+    if bind.is_loopback() || bind.is_unspecified() {
+        hosts.push(format!("127.0.0.1:{port}"));
+        hosts.push(format!("localhost:{port}"));
+    }
+    hosts
+}
+
+/// The page with its ports and sliders filled in.
+fn page_html(cfg: &PageConfig) -> String {
+    let params = serde_json::to_string(PARAMS).unwrap_or_else(|_| "[]".into());
+    PAGE.replace("__VIEWER_PORT__", &cfg.viewer_port.to_string())
+        .replace("__GRPC_PORT__", &cfg.grpc_port.to_string())
+        .replace("__PARAMS__", &params)
+}
+
+/// What the server thread owns.
+struct Serving {
+    hosts: Vec<String>,
+    any_host: bool,
+    page: String,
+    state: Arc<SharedState>,
+    commands: Sender<WebCommand>,
+}
+
+/// A reply: status and JSON or HTML body.
+struct Reply {
+    status: u16,
+    body: String,
+    html: bool,
+}
+
+impl Reply {
+    fn json(status: u16, value: serde_json::Value) -> Reply {
+        Reply {
+            status,
+            body: value.to_string(),
+            html: false,
+        }
+    }
+    fn error(status: u16, msg: impl Into<String>) -> Reply {
+        Reply::json(
+            status,
+            serde_json::json!({ "ok": false, "error": msg.into() }),
+        )
+    }
+}
+
+impl Serving {
+    fn handle(&self, mut req: Request) {
+        let reply = self.route(&mut req);
+        let ctype = if reply.html {
+            "text/html; charset=utf-8"
+        } else {
+            "application/json"
+        };
+        let mut resp = Response::from_string(reply.body).with_status_code(reply.status);
+        for (k, v) in [
+            ("Content-Type", ctype),
+            ("Cache-Control", "no-store"),
+            ("X-Content-Type-Options", "nosniff"),
+            // Nobody else may frame the controls (clickjacking).
+            ("Content-Security-Policy", "frame-ancestors 'none'"),
+        ] {
+            if let Ok(h) = Header::from_bytes(k, v) {
+                resp.add_header(h);
+            }
+        }
+        let _ = req.respond(resp);
+    }
+
+    fn route(&self, req: &mut Request) -> Reply {
+        let host = header(req, "Host").unwrap_or_default();
+        if !self.any_host && !self.hosts.iter().any(|h| h.eq_ignore_ascii_case(&host)) {
+            return Reply::error(403, format!("refused: unknown Host `{host}`"));
+        }
+        let path = req.url().split('?').next().unwrap_or("").to_owned();
+        match (req.method(), path.as_str()) {
+            (Method::Get, "/") => Reply {
+                status: 200,
+                body: self.page.clone(),
+                html: true,
+            },
+            (Method::Get, "/api/state") => match serde_json::to_value(self.state.snapshot()) {
+                Ok(v) => Reply::json(200, v),
+                Err(e) => Reply::error(500, e.to_string()),
+            },
+            (Method::Post, "/api/control") => self.control(req, &host),
+            (_, "/" | "/api/state" | "/api/control") => Reply::error(405, "method not allowed"),
+            _ => Reply::error(404, format!("no page `{path}`")),
+        }
+    }
+
+    /// The control endpoint: same origin, JSON, small, and one of the page's messages.
+    fn control(&self, req: &mut Request, host: &str) -> Reply {
+        let origin = header(req, "Origin").unwrap_or_default();
+        if origin != format!("http://{host}") {
+            return Reply::error(
+                403,
+                format!("refused: requests from other origins are not taken (Origin `{origin}`)"),
+            );
+        }
+        let json = header(req, "Content-Type")
+            .is_some_and(|c| c.to_ascii_lowercase().starts_with("application/json"));
+        if !json {
+            return Reply::error(415, "refused: the body must be application/json");
+        }
+        if req.body_length().is_some_and(|n| n > MAX_BODY) {
+            return Reply::error(413, "refused: request too large");
+        }
+        let mut body = String::new();
+        let read = req
+            .as_reader()
+            .take(MAX_BODY as u64 + 1)
+            .read_to_string(&mut body);
+        if read.is_err() || body.len() > MAX_BODY {
+            return Reply::error(400, "refused: unreadable or too large body");
+        }
+        match protocol::parse_request(&body, &self.state.snapshot()) {
+            Ok(cmd) => match self.commands.send(cmd) {
+                Ok(()) => Reply::json(200, serde_json::json!({ "ok": true })),
+                Err(_) => Reply::error(503, "the simulation has ended"),
+            },
+            Err(msg) => Reply::error(400, msg),
+        }
+    }
+}
+
+/// A request header's value.
+fn header(req: &Request, name: &str) -> Option<String> {
+    req.headers()
+        .iter()
+        .find(|h| h.field.as_str().as_str().eq_ignore_ascii_case(name))
+        .map(|h| h.value.as_str().to_owned())
+}

@@ -1,0 +1,162 @@
+//! `wisptree run --web`: what listens where, which requests the control endpoint takes, and
+//! that a change reaches the simulation and every page's state. (The page in a real browser:
+//! `tests/web_browser.rs`.)
+
+mod web_common;
+
+use std::time::Duration;
+
+use web_common::{http, listening_addresses, WebRun};
+
+#[test]
+fn everything_listens_on_loopback_only_and_ctrl_c_stops_cleanly() {
+    let mut run = WebRun::start(&[]);
+    let line = run.wait_line("Rerun web viewer on port", Duration::from_secs(10));
+    let ports: Vec<u16> = line
+        .split(|c: char| !c.is_ascii_digit())
+        .filter_map(|w| w.parse().ok())
+        .filter(|p| *p > 1000)
+        .collect();
+    assert_eq!(ports.len(), 2, "viewer and gRPC ports in {line:?}");
+    // Every server is up once the page answers.
+    assert_eq!(http(run.port, "GET", "/", &[], "").status, 200);
+    let addrs = listening_addresses(run.child.id());
+    for p in ports.iter().chain([&run.port]) {
+        assert!(
+            addrs.iter().any(|a| a.ends_with(&format!(":{p}"))),
+            "port {p} not among the listeners {addrs:?}"
+        );
+    }
+    assert!(addrs.len() >= 3, "{addrs:?}");
+    for a in &addrs {
+        assert!(
+            a.starts_with("127.0.0.1:"),
+            "listening outside loopback: {a} (all: {addrs:?})"
+        );
+    }
+    let st = run.interrupt();
+    assert!(st.success(), "exit after Ctrl-C: {st}");
+}
+
+#[test]
+fn the_control_endpoint_takes_only_the_pages_requests_from_its_own_origin() {
+    let run = WebRun::start(&[]);
+    let port = run.port;
+    let page = http(port, "GET", "/", &[], "");
+    assert_eq!(page.status, 200);
+    assert!(
+        page.body.contains("split") && page.body.contains("<iframe"),
+        "{}",
+        page.body
+    );
+    let s0 = run.wait_state("first published state", |s| s["version"].as_u64() > Some(0));
+    let split0 = s0["params"]["split_threshold"].as_f64().unwrap();
+    let good = r#"{"type":"set","param":"split_threshold","value":0.45}"#;
+
+    // Other origins, no origin, another Host (DNS rebinding), a form post: refused.
+    let origin = format!("http://127.0.0.1:{port}");
+    let json = ("Content-Type", "application/json");
+    for (headers, code) in [
+        (vec![json], 403),
+        (vec![("Origin", "http://evil.example"), json], 403),
+        (vec![("Origin", "null"), json], 403),
+        (
+            vec![("Origin", origin.as_str()), ("Content-Type", "text/plain")],
+            415,
+        ),
+        (
+            vec![
+                ("Host", "evil.example"),
+                ("Origin", "http://evil.example"),
+                json,
+            ],
+            403,
+        ),
+    ] {
+        let r = http(port, "POST", "/api/control", &headers, good);
+        assert_eq!(r.status, code, "{headers:?}: {}", r.body);
+        assert!(r.body.contains("refused"), "{}", r.body);
+    }
+    assert_eq!(
+        http(
+            port,
+            "GET",
+            "/api/state",
+            &[("Host", "evil.example:80")],
+            ""
+        )
+        .status,
+        403
+    );
+    assert_eq!(http(port, "GET", "/api/control", &[], "").status, 405);
+    assert_eq!(http(port, "GET", "/secret", &[], "").status, 404);
+    std::thread::sleep(Duration::from_millis(300));
+    assert_eq!(
+        run.state()["params"]["split_threshold"].as_f64(),
+        Some(split0)
+    );
+
+    // Bad values and unknown messages: refused with a message, the run goes on.
+    for (body, needle) in [
+        (
+            r#"{"type":"set","param":"split_threshold","value":3}"#,
+            "between",
+        ),
+        (
+            r#"{"type":"set","param":"split_threshold","value":"x"}"#,
+            "not a number",
+        ),
+        (r#"{"type":"set","param":"friction","value":150}"#, "α·dt"),
+        (r#"{"type":"quit"}"#, "not a request"),
+        (
+            r#"{"type":"motion","name":"../../etc/passwd"}"#,
+            "no motion",
+        ),
+    ] {
+        let r = run.control(body);
+        assert_eq!(r.status, 400, "{body}: {}", r.body);
+        assert!(r.body.contains(needle), "{body}: {}", r.body);
+    }
+
+    // The page's own request is taken, and the simulation's state shows it.
+    let r = run.control(good);
+    assert_eq!(r.status, 200, "{}", r.body);
+    let s = run.wait_state("split threshold applied", |s| {
+        s["params"]["split_threshold"].as_f64() == Some(0.45)
+    });
+    assert!(
+        s["log"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .any(|l| l["text"].as_str().unwrap().contains("split threshold")),
+        "the change is in the log: {s}"
+    );
+    let wind = run.control(r#"{"type":"set","param":"wind","value":2}"#);
+    assert_eq!(wind.status, 200, "{}", wind.body);
+    run.wait_state("wind applied", |s| {
+        s["params"]["wind"].as_f64() == Some(2.0)
+    });
+    // Pause, a model switch and a motion switch keep the tuned threshold.
+    assert_eq!(run.control(r#"{"type":"pause","paused":true}"#).status, 200);
+    run.wait_state("paused", |s| s["paused"] == true);
+    assert_eq!(
+        run.control(r#"{"type":"pause","paused":false}"#).status,
+        200
+    );
+    assert_eq!(
+        run.control(r#"{"type":"model","name":"single-level"}"#)
+            .status,
+        200
+    );
+    assert_eq!(
+        run.control(r#"{"type":"motion","name":"shake"}"#).status,
+        200
+    );
+    let s = run.wait_state("model and motion switched", |s| {
+        s["model"] == "single-level" && s["motion"] == "shake"
+    });
+    assert_eq!(s["params"]["split_threshold"].as_f64(), Some(0.45), "{s}");
+    let t = s["sim_time"].as_f64().unwrap();
+    run.wait_state("still simulating", |s| s["sim_time"].as_f64().unwrap() > t);
+}

@@ -1,0 +1,275 @@
+//! The control page in a real browser: headless Chromium driven over WebDriver
+//! (`chromedriver`, Debian's `chromium-driver`; `.ci/run` installs both). It moves the split
+//! threshold slider with the pointer and checks that the simulation takes the value, that an
+//! out-of-range value typed in is refused on the page, that a second tab shows the change, and
+//! it takes a screenshot of the page at 1280×800 (`target/web_page.png`; with
+//! `WISPTREE_DOCS_SHOT=1`, also `docs/web.png`).
+
+mod web_common;
+
+use std::process::{Child, Command, Stdio};
+use std::time::{Duration, Instant};
+
+use base64::Engine as _;
+use serde_json::{json, Value};
+use web_common::{http, try_http, WebRun};
+
+/// A chromedriver process and one session.
+struct Driver {
+    child: Child,
+    port: u16,
+    session: String,
+}
+
+impl Driver {
+    fn start() -> Driver {
+        let port = std::net::TcpListener::bind("127.0.0.1:0")
+            .unwrap()
+            .local_addr()
+            .unwrap()
+            .port();
+        let child = Command::new("chromedriver")
+            .arg(format!("--port={port}"))
+            .stdout(Stdio::null())
+            .stderr(Stdio::null())
+            .spawn()
+            .expect(
+                "chromedriver not found: install Debian's chromium and chromium-driver \
+                 (`.ci/run` does)",
+            );
+        let mut d = Driver {
+            child,
+            port,
+            session: String::new(),
+        };
+        let start = Instant::now();
+        while std::net::TcpStream::connect(("127.0.0.1", port)).is_err() {
+            assert!(
+                start.elapsed() < Duration::from_secs(20),
+                "chromedriver does not listen"
+            );
+            std::thread::sleep(Duration::from_millis(100));
+        }
+        let caps = json!({"capabilities": {"alwaysMatch": {
+            "browserName": "chrome",
+            // Do not wait for the embedded viewer's 40 MB of wasm to load.
+            "pageLoadStrategy": "eager",
+            "goog:chromeOptions": {
+                "binary": "/usr/bin/chromium",
+                "args": ["--headless=new", "--no-sandbox", "--disable-dev-shm-usage",
+                         "--window-size=1280,800", "--hide-scrollbars",
+                         "--use-angle=swiftshader", "--enable-unsafe-swiftshader"]
+            }
+        }}});
+        let v = d.call("POST", "/session", Some(caps));
+        d.session = v["sessionId"].as_str().expect("a session id").to_owned();
+        // A 1280×800 viewport: the window adds the browser's own frame.
+        let frame = d.script(
+            "return [window.outerWidth - window.innerWidth, window.outerHeight - window.innerHeight]",
+            json!([]),
+        );
+        let (dx, dy) = (
+            frame[0].as_i64().unwrap_or(0),
+            frame[1].as_i64().unwrap_or(0),
+        );
+        d.call(
+            "POST",
+            "/window/rect",
+            Some(json!({"width": 1280 + dx, "height": 800 + dy})),
+        );
+        d
+    }
+
+    /// One WebDriver call; its `value`.
+    fn call(&self, method: &str, path: &str, body: Option<Value>) -> Value {
+        eprintln!("webdriver: {method} {path}");
+        let path = if path.starts_with("/session/") || path == "/session" {
+            path.to_owned()
+        } else {
+            format!("/session/{}{path}", self.session)
+        };
+        let body = body.map(|b| b.to_string()).unwrap_or_default();
+        let headers: &[(&str, &str)] = if method == "POST" {
+            &[("Content-Type", "application/json")]
+        } else {
+            &[]
+        };
+        let r = http(self.port, method, &path, headers, &body);
+        let v: Value = serde_json::from_str(&r.body)
+            .unwrap_or_else(|_| panic!("{method} {path}: not JSON: {}", r.body));
+        assert_eq!(r.status, 200, "{method} {path} {body}: {v}");
+        v["value"].clone()
+    }
+
+    fn script(&self, js: &str, args: Value) -> Value {
+        self.call(
+            "POST",
+            "/execute/sync",
+            Some(json!({"script": js, "args": args})),
+        )
+    }
+
+    fn element(&self, css: &str) -> String {
+        let v = self.call(
+            "POST",
+            "/element",
+            Some(json!({"using": "css selector", "value": css})),
+        );
+        v.as_object()
+            .and_then(|o| o.values().next())
+            .and_then(|v| v.as_str())
+            .expect("an element id")
+            .to_owned()
+    }
+
+    fn text(&self, css: &str) -> String {
+        let id = self.element(css);
+        self.call("GET", &format!("/element/{id}/text"), None)
+            .as_str()
+            .unwrap_or_default()
+            .to_owned()
+    }
+
+    /// Waits until `f` holds for the text of `css`.
+    fn wait_text(&self, css: &str, what: &str, f: impl Fn(&str) -> bool) -> String {
+        let start = Instant::now();
+        loop {
+            let t = self.text(css);
+            if f(&t) {
+                return t;
+            }
+            assert!(
+                start.elapsed() < Duration::from_secs(30),
+                "{what}: `{css}` shows {t:?}"
+            );
+            std::thread::sleep(Duration::from_millis(100));
+        }
+    }
+
+    /// A pointer click in the middle of an element (WebDriver's element click: the browser
+    /// moves the pointer there and presses the button, as a user would).
+    fn click(&self, css: &str) {
+        let id = self.element(css);
+        self.call("POST", &format!("/element/{id}/click"), Some(json!({})));
+    }
+}
+
+impl Drop for Driver {
+    fn drop(&mut self) {
+        if !self.session.is_empty() {
+            let _ = try_http(
+                self.port,
+                "DELETE",
+                &format!("/session/{}", self.session),
+                &[],
+                "",
+            );
+        }
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+#[test]
+fn the_page_moves_the_simulation_refuses_bad_values_and_keeps_tabs_in_agreement() {
+    let mut run = WebRun::start(&[]);
+    run.wait_state("first published state", |s| s["version"].as_u64() > Some(0));
+    let d = Driver::start();
+    // The controls without the embedded viewer: the Rerun web viewer, rendering in software on
+    // a 2-core machine, can keep a headless browser too busy to answer the driver.
+    let page = format!("{}?viewer=0", run.url());
+    d.call("POST", "/url", Some(json!({"url": page})));
+    let before = d.wait_text("#v-split_threshold", "the page shows the state", |t| {
+        t.parse::<f64>().is_ok()
+    });
+    let split0 = run.state()["params"]["split_threshold"].as_f64().unwrap();
+    assert!((before.parse::<f64>().unwrap() - split0).abs() < 1e-3 * split0.max(1.0));
+
+    // Move the slider with the pointer: a click in its middle.
+    d.click("#p-split_threshold");
+    let s = run.wait_state("the slider's value reaches the simulation", |s| {
+        s["params"]["split_threshold"].as_f64() != Some(split0)
+    });
+    let split1 = s["params"]["split_threshold"].as_f64().unwrap();
+    // The middle of the log scale of 0.05–1.
+    let expected = 0.05 * 20f64.powf(0.5);
+    assert!(
+        (split1 / expected).ln().abs() < 0.1,
+        "{split1} vs {expected}"
+    );
+    d.wait_text("#v-split_threshold", "the page shows the new value", |t| {
+        t.parse::<f64>().is_ok_and(|v| (v - split1).abs() < 1e-3)
+    });
+
+    // An out-of-range value typed in is refused on the page; the simulation keeps its value.
+    let n = d.element("#n-split_threshold");
+    d.call("POST", &format!("/element/{n}/clear"), Some(json!({})));
+    d.call(
+        "POST",
+        &format!("/element/{n}/value"),
+        Some(json!({"text": "5\u{E007}"})),
+    );
+    let status = d.wait_text("#status", "the refusal shows", |t| t.contains("refused"));
+    assert!(status.contains("between 0.05 and 1"), "{status}");
+    let class = d.script(
+        "return document.getElementById('status').className",
+        json!([]),
+    );
+    assert_eq!(class, "refused");
+    std::thread::sleep(Duration::from_millis(500));
+    assert_eq!(
+        run.state()["params"]["split_threshold"].as_f64(),
+        Some(split1)
+    );
+
+    // A second tab shows the value set in the first, and a change made there comes back.
+    let first = d.call("GET", "/window", None);
+    let second = d.call("POST", "/window/new", Some(json!({"type": "tab"})));
+    let handle = second["handle"].as_str().unwrap().to_owned();
+    d.call("POST", "/window", Some(json!({"handle": handle})));
+    d.call("POST", "/url", Some(json!({"url": page})));
+    d.wait_text("#v-split_threshold", "the second tab agrees", |t| {
+        t.parse::<f64>().is_ok_and(|v| (v - split1).abs() < 1e-3)
+    });
+    d.click("#p-merge_velocity");
+    let merge = run.wait_state("merge set in the second tab", |s| {
+        let v = s["params"]["merge_velocity"].as_f64().unwrap();
+        (v / (0.005 * 200f64.powf(0.5))).ln().abs() < 0.05
+    })["params"]["merge_velocity"]
+        .as_f64()
+        .unwrap();
+    d.call("POST", "/window", Some(json!({"handle": first})));
+    d.wait_text("#v-merge_velocity", "the first tab follows", |t| {
+        t.parse::<f64>().is_ok_and(|v| (v - merge).abs() < 1e-3)
+    });
+
+    // A screenshot at 1280×800, after the viewer had a moment to load.
+    std::thread::sleep(Duration::from_secs(8));
+    let png = d.call("GET", "/screenshot", None);
+    let bytes = base64::engine::general_purpose::STANDARD
+        .decode(png.as_str().unwrap())
+        .unwrap();
+    let target = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("target/web_page.png");
+    std::fs::write(&target, &bytes).unwrap();
+    if std::env::var_os("WISPTREE_DOCS_SHOT").is_some() {
+        let docs = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("docs/web.png");
+        std::fs::write(docs, &bytes).unwrap();
+    }
+    let img = image::load_from_memory(&bytes).unwrap().to_rgb8();
+    assert_eq!((img.width(), img.height()), (1280, 800));
+    // The panel is not blank: many distinct colours (text, sliders, buttons).
+    let mut colours: Vec<[u8; 3]> = img
+        .enumerate_pixels()
+        .filter(|(x, _, _)| *x < 330)
+        .map(|(_, _, p)| p.0)
+        .collect();
+    colours.sort_unstable();
+    colours.dedup();
+    assert!(
+        colours.len() > 20,
+        "a blank page? {} colours",
+        colours.len()
+    );
+    drop(d);
+    assert!(run.interrupt().success());
+}
