@@ -26,6 +26,7 @@ pub mod resolve;
 pub mod scene_16k;
 pub mod shading;
 pub mod shadow;
+mod tile;
 
 use std::path::Path;
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -40,8 +41,9 @@ pub use shadow::{eq1_opacity, ShadowMaps, MAPS};
 
 use crate::frame::{BodyBuf, StrandBuf};
 use camera::{normalize, sub, View};
-use raster::{Bins, Grid, ScreenVertex, TileBuf, TILE};
+use raster::{Bins, Grid, ScreenVertex, TILE};
 use shading::{srgb3_to_linear, HairShader};
+use tile::TileBuf;
 
 /// Largest image side accepted, pixels.
 pub const MAX_SIDE: u32 = 8192;
