@@ -466,7 +466,14 @@ pub fn write_png(img: &Image, path: &Path) -> std::io::Result<()> {
 /// Encodes `img` as a baseline JPEG of `quality` (1–100, clamped).
 pub fn encode_jpeg(img: &Image, quality: u8) -> Vec<u8> {
     let mut out = Vec::new();
-    let enc = image::codecs::jpeg::JpegEncoder::new_with_quality(&mut out, quality.clamp(1, 100));
+    encode_jpeg_into(img, quality, &mut out);
+    out
+}
+
+/// [`encode_jpeg`] into `out` (cleared first), reusing its allocation.
+pub fn encode_jpeg_into(img: &Image, quality: u8, out: &mut Vec<u8>) {
+    out.clear();
+    let enc = image::codecs::jpeg::JpegEncoder::new_with_quality(&mut *out, quality.clamp(1, 100));
     // Encoding into memory fails only on a size the image type cannot hold, which an `Image`
     // from the renderer (≤ 8192 per side) never has.
     if image::ImageEncoder::write_image(
@@ -480,5 +487,4 @@ pub fn encode_jpeg(img: &Image, quality: u8) -> Vec<u8> {
     {
         out.clear();
     }
-    out
 }
