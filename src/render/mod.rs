@@ -7,9 +7,9 @@
 //! 2. **Shading**: every strand point is shaded with Kajiya-Kay ([`shading`]) under the light
 //!    transmittance of the maps, and projected (Zhang and Wünsche shade per vertex and let the
 //!    rasteriser interpolate colours, §6.1).
-//! 3. **Rasterising** ([`raster`], `tile`): segments binned into 32×32-pixel tiles, each
-//!    tile's list sorted by depth; each tile ray casts the body ([`body`]) then blends its
-//!    segments front to back on a supersampled grid.
+//! 3. **Rasterising** ([`raster`]): segments sorted by depth once, binned into 32×32-pixel
+//!    tiles; each tile ray casts the body ([`body`]) then blends its segments front to back on
+//!    a supersampled grid.
 //! 4. **Resolve** ([`resolve`]): body or background behind the hair, box filter per pixel,
 //!    3×3 postfilter, sRGB.
 //!
@@ -100,9 +100,8 @@ const CHUNKS: usize = 16;
 
 struct Worker {
     buf: TileBuf,
-    order: Vec<u32>,
-    keys: Vec<u16>,
-    tmp: Vec<u32>,
+    sorted: Vec<raster::SegRec>,
+    tmp: Vec<raster::SegRec>,
     pixels: Vec<f32>,
     raster_ns: u64,
     resolve_ns: u64,
@@ -159,8 +158,7 @@ impl Renderer {
             .map(|_| {
                 Mutex::new(Worker {
                     buf: TileBuf::default(),
-                    order: Vec::new(),
-                    keys: Vec::new(),
+                    sorted: Vec::new(),
                     tmp: Vec::new(),
                     pixels: Vec::new(),
                     raster_ns: 0,
@@ -409,15 +407,13 @@ impl Renderer {
                 w.buf.reset(n, ox, oy);
                 w.buf.cast_body(view, prims);
                 w.buf.close_blocks();
-                let ((s0, k0), (s1, k1)) = (halves[0].tile(t), halves[1].tile(t));
-                raster::sort_tile(k0, k1, &mut w.order, &mut w.keys, &mut w.tmp);
-                for &i in &w.order {
-                    let i = i as usize;
-                    let s = if i < s0.len() {
-                        &s0[i]
-                    } else {
-                        &s1[i - s0.len()]
-                    };
+                raster::sort_tile(
+                    halves[0].tile(t),
+                    halves[1].tile(t),
+                    &mut w.sorted,
+                    &mut w.tmp,
+                );
+                for s in &w.sorted {
                     w.buf.segment(&s.a, &s.b, half, alpha);
                     if w.buf.alive == 0 {
                         break;

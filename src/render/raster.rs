@@ -22,12 +22,13 @@ pub(crate) struct ScreenVertex {
 }
 
 /// A segment as binned: its two end points, copied so that a tile reads its segments from
-/// one contiguous run of memory (its depth key is kept apart, in [`HalfBins::keys`], so that
-/// sorting a tile moves 2-byte keys and 4-byte indices, never these 48-byte records).
+/// one contiguous run of memory.
 #[derive(Debug, Clone, Copy, Default)]
 pub(crate) struct SegRec {
     pub a: ScreenVertex,
     pub b: ScreenVertex,
+    /// Midpoint view depth, quantised to 16 bits over the frame's depth range.
+    pub key: u32,
 }
 
 /// The frame's visible segments binned into tiles, each with a 16-bit depth key; each tile
@@ -53,8 +54,6 @@ pub(crate) struct HalfBins {
     /// Per tile, `start[t]..start[t + 1]` in `items`.
     pub start: Vec<u32>,
     pub items: Vec<SegRec>,
-    /// Per item, its midpoint view depth quantised to 16 bits over the frame's depth range.
-    pub keys: Vec<u16>,
 }
 
 /// Largest argument [`floor_pos`] and [`ceil_pos`] tell apart (far beyond any image).
@@ -189,7 +188,6 @@ impl HalfBins {
         let nt = grid.tiles();
         let total = self.start[nt] as usize;
         self.items.resize(total, SegRec::default());
-        self.keys.resize(total, 0);
         self.cursor.clear();
         self.cursor.extend_from_slice(&self.start[..nt]);
         let scale = if zhi > zlo {
@@ -200,12 +198,11 @@ impl HalfBins {
         for (&i, &[x0, x1, y0, y1]) in self.firsts.iter().zip(&self.rects) {
             let (a, b) = (verts[i as usize], verts[i as usize + 1]);
             let z = 0.5 * (a.z + b.z);
-            let key = (((z - zlo) * scale) as u32).min(65535) as u16;
+            let key = (((z - zlo) * scale) as u32).min(65535);
             for ty in y0 as usize..=y1 as usize {
                 for tx in x0 as usize..=x1 as usize {
                     let c = &mut self.cursor[ty * grid.tiles_x + tx];
-                    self.items[*c as usize] = SegRec { a, b };
-                    self.keys[*c as usize] = key;
+                    self.items[*c as usize] = SegRec { a, b, key };
                     *c += 1;
                 }
             }
@@ -217,51 +214,38 @@ impl HalfBins {
         (self.zlo, self.zhi)
     }
 
-    /// Tile `t`'s segments and their keys.
-    pub fn tile(&self, t: usize) -> (&[SegRec], &[u16]) {
-        let r = self.start[t] as usize..self.start[t + 1] as usize;
-        (&self.items[r.clone()], &self.keys[r])
+    /// Tile `t`'s segments.
+    pub fn tile(&self, t: usize) -> &[SegRec] {
+        &self.items[self.start[t] as usize..self.start[t + 1] as usize]
     }
 }
 
-/// Sorts a tile's segments front to back: `order` gets the indices into its two lists
-/// (half 0's `first` then half 1's `second`, as keys `k0` and `k1`) by increasing key, equal
-/// keys in that order: two stable 8-bit counting passes over indices, so the order is the
-/// same on every run. `keys` and `tmp` are scratch.
+/// Sorts a tile's segments front to back into `out` (by increasing key, equal keys in strand
+/// order: two stable 8-bit counting passes, so the order is the same on every run). The
+/// records themselves move, so that the rasteriser then reads them in order from memory.
 pub(crate) fn sort_tile(
-    k0: &[u16],
-    k1: &[u16],
-    order: &mut Vec<u32>,
-    keys: &mut Vec<u16>,
-    tmp: &mut Vec<u32>,
+    first: &[SegRec],
+    second: &[SegRec],
+    out: &mut Vec<SegRec>,
+    tmp: &mut Vec<SegRec>,
 ) {
-    keys.clear();
-    keys.extend_from_slice(k0);
-    keys.extend_from_slice(k1);
-    let n = keys.len();
-    order.resize(n, 0);
-    tmp.resize(n, 0);
-    let histogram = |shift: u32| {
-        let mut counts = [0u32; 256];
-        for &k in keys.iter() {
-            counts[((k >> shift) & 0xff) as usize] += 1;
+    let n = first.len() + second.len();
+    out.resize(n, SegRec::default());
+    tmp.resize(n, SegRec::default());
+    let pass = |a: &[SegRec], b: &[SegRec], dst: &mut [SegRec], shift: u32| {
+        let mut counts = [0u32; 257];
+        for r in a.iter().chain(b) {
+            counts[((r.key >> shift) & 0xff) as usize + 1] += 1;
         }
-        let mut sum = 0;
-        for c in &mut counts {
-            (*c, sum) = (sum, sum + *c);
+        for d in 1..257 {
+            counts[d] += counts[d - 1];
         }
-        counts
+        for r in a.iter().chain(b) {
+            let d = ((r.key >> shift) & 0xff) as usize;
+            dst[counts[d] as usize] = *r;
+            counts[d] += 1;
+        }
     };
-    let mut counts = histogram(0);
-    for (i, &k) in keys.iter().enumerate() {
-        let d = (k & 0xff) as usize;
-        tmp[counts[d] as usize] = i as u32;
-        counts[d] += 1;
-    }
-    let mut counts = histogram(8);
-    for &i in tmp.iter() {
-        let d = (keys[i as usize] >> 8) as usize;
-        order[counts[d] as usize] = i;
-        counts[d] += 1;
-    }
+    pass(first, second, tmp, 0);
+    pass(tmp, &[], out, 8);
 }

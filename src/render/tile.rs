@@ -94,7 +94,7 @@ impl TileBuf {
         self.px.resize(m, Px([0.0, 0.0, 0.0, 1.0]));
         self.zb.clear();
         self.zb.resize(m, f32::INFINITY);
-        // Not cleared: `prim` is read only where `zb` is finite, which `cast_body` sets with it.
+        self.prim.clear();
         self.prim.resize(m, 0);
         self.alive = m;
         self.nb = n.div_ceil(BLOCK);
