@@ -5,11 +5,17 @@
 //! renderer shows the newest state it can), so a slow renderer never holds the simulation
 //! back; the skipped frames are counted in `/stats/render_skipped`. Recording, every frame is
 //! rendered.
+//!
+//! The JPEG encoding runs on a thread of its own, one frame behind the renderer: the encoder
+//! is single-threaded, and done in line it left one of the renderer's two cores idle for a
+//! tenth of every frame. Frames keep their order (one encoder, first in first out), and the
+//! images go back to the renderer to be drawn into again.
 
 use crossbeam_channel::{Receiver, Sender};
+use std::thread::JoinHandle;
 
 use crate::frame::Frame;
-use crate::render::{camera::DEFAULT_VIEW, encode_jpeg, Camera, Image, RenderInput, Renderer};
+use crate::render::{camera::DEFAULT_VIEW, encode_jpeg_into, Camera, Image, RenderInput, Renderer};
 use crate::report::{Aggregate, Stat};
 use crate::scene::Scene;
 
@@ -44,10 +50,21 @@ pub struct RenderThread {
 impl RenderThread {
     /// Renders until the simulation thread hangs up or the logger goes away.
     pub fn run(mut self) {
-        let mut image = Image::default();
+        let (to_encoder, encoder_in) = crossbeam_channel::bounded::<Job>(1);
+        let (images_back, images) = crossbeam_channel::unbounded::<Image>();
+        let encoder = {
+            let output = self.output.clone();
+            std::thread::Builder::new()
+                .name("wisptree-jpeg".into())
+                .spawn(move || encode_loop(&encoder_in, &output, &images_back))
+        };
+        // Without an encoder thread (the system refused one), encode in line.
+        let mut inline = Image::default();
+        let encoder: Option<JoinHandle<()>> = encoder.ok();
         let mut skipped = 0u64;
         while let Ok(mut frame) = self.input.recv() {
             let behind = self.live && !self.input.is_empty();
+            let mut image = None;
             if behind || frame.render_strands.is_empty() {
                 skipped += u64::from(behind);
                 frame.image = None;
@@ -56,21 +73,64 @@ impl RenderThread {
                     strands: &frame.render_strands,
                     body: &frame.body,
                 };
-                self.renderer.render(&input, &self.camera, &mut image);
-                let mut encoded = frame.image.take().unwrap_or_default();
-                encoded.jpeg = encode_jpeg(&image, JPEG_QUALITY);
-                encoded.width = image.width;
-                encoded.height = image.height;
-                frame.image = Some(encoded);
+                let mut img = if encoder.is_some() {
+                    images.try_recv().unwrap_or_default()
+                } else {
+                    std::mem::take(&mut inline)
+                };
+                self.renderer.render(&input, &self.camera, &mut img);
+                image = Some(img);
             }
             frame.stats.push(Stat {
                 path: RENDER_SKIPPED,
                 value: skipped as f64,
                 aggregate: Aggregate::Last,
             });
-            if self.output.send(frame).is_err() {
+            let sent = if encoder.is_some() {
+                to_encoder.send(Job { frame, image }).is_ok()
+            } else {
+                if let Some(img) = &image {
+                    encode(&mut frame, img);
+                }
+                inline = image.unwrap_or_default();
+                self.output.send(frame).is_ok()
+            };
+            if !sent {
                 break;
             }
+        }
+        drop(to_encoder);
+        if let Some(e) = encoder {
+            let _ = e.join();
+        }
+    }
+}
+
+/// A frame on its way to the encoder, with its rendered image (none if it was skipped).
+struct Job {
+    frame: Frame,
+    image: Option<Image>,
+}
+
+/// Puts `img` into `frame` as a JPEG, reusing the frame's previous JPEG buffer.
+fn encode(frame: &mut Frame, img: &Image) {
+    let mut encoded = frame.image.take().unwrap_or_default();
+    encode_jpeg_into(img, JPEG_QUALITY, &mut encoded.jpeg);
+    encoded.width = img.width;
+    encoded.height = img.height;
+    frame.image = Some(encoded);
+}
+
+/// The encoder thread: encodes each job's image, passes the frame on, returns the image.
+fn encode_loop(jobs: &Receiver<Job>, output: &Sender<Frame>, images: &Sender<Image>) {
+    while let Ok(Job { mut frame, image }) = jobs.recv() {
+        if let Some(img) = image {
+            encode(&mut frame, &img);
+            // The renderer may be gone already; the image is then simply dropped.
+            let _ = images.send(img);
+        }
+        if output.send(frame).is_err() {
+            break;
         }
     }
 }

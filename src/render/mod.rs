@@ -26,6 +26,7 @@ pub mod resolve;
 pub mod scene_16k;
 pub mod shading;
 pub mod shadow;
+mod tile;
 
 use std::path::Path;
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -40,8 +41,9 @@ pub use shadow::{eq1_opacity, ShadowMaps, MAPS};
 
 use crate::frame::{BodyBuf, StrandBuf};
 use camera::{normalize, sub, View};
-use raster::{Bins, Grid, ScreenVertex, TileBuf, TILE};
+use raster::{Bins, Grid, ScreenVertex, TILE};
 use shading::{srgb3_to_linear, HairShader};
+use tile::TileBuf;
 
 /// Largest image side accepted, pixels.
 pub const MAX_SIDE: u32 = 8192;
@@ -464,7 +466,14 @@ pub fn write_png(img: &Image, path: &Path) -> std::io::Result<()> {
 /// Encodes `img` as a baseline JPEG of `quality` (1–100, clamped).
 pub fn encode_jpeg(img: &Image, quality: u8) -> Vec<u8> {
     let mut out = Vec::new();
-    let enc = image::codecs::jpeg::JpegEncoder::new_with_quality(&mut out, quality.clamp(1, 100));
+    encode_jpeg_into(img, quality, &mut out);
+    out
+}
+
+/// [`encode_jpeg`] into `out` (cleared first), reusing its allocation.
+pub fn encode_jpeg_into(img: &Image, quality: u8, out: &mut Vec<u8>) {
+    out.clear();
+    let enc = image::codecs::jpeg::JpegEncoder::new_with_quality(&mut *out, quality.clamp(1, 100));
     // Encoding into memory fails only on a size the image type cannot hold, which an `Image`
     // from the renderer (≤ 8192 per side) never has.
     if image::ImageEncoder::write_image(
@@ -478,5 +487,4 @@ pub fn encode_jpeg(img: &Image, quality: u8) -> Vec<u8> {
     {
         out.clear();
     }
-    out
 }

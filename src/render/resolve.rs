@@ -5,9 +5,10 @@
 
 use super::body::Prim;
 use super::camera::{add, dot, scale, View};
-use super::raster::{TileBuf, APRON, OPAQUE, TILE};
+use super::raster::{APRON, OPAQUE, TILE};
 use super::shading::LUT_SIZE;
 use super::shadow::ShadowMaps;
+use super::tile::TileBuf;
 
 /// What the resolve needs of the frame.
 pub(crate) struct Resolve<'a> {
@@ -67,8 +68,8 @@ impl Resolve<'_> {
                     for sx in 0..ss {
                         let i = px * ss + sx;
                         let at = j * n + i;
-                        let tr = buf.trans[at];
-                        let mut c = [buf.r[at], buf.g[at], buf.b[at]];
+                        let [r, g, b, tr] = buf.px[at].0;
+                        let mut c = [r, g, b];
                         if tr >= OPAQUE {
                             let base = if buf.zb[at].is_finite() {
                                 let k = buf.prim[at];

@@ -150,7 +150,6 @@ impl ShadowMaps {
         let u = normalize(cross(helper, d));
         let v = cross(d, u);
         (self.ax_u, self.ax_v, self.ax_d) = (u, v, d);
-        self.omega.fill(0.0);
         self.lp.clear();
         let (mut lo, mut hi) = ([f32::INFINITY; 3], [f32::NEG_INFINITY; 3]);
         for p in points {
