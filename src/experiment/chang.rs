@@ -2,7 +2,9 @@
 //!
 //! `chang-shake` (§7.1): a head shake, then stillness; how far the hairstyle is from its shape
 //! one second after the motion stops, with strong static links, without links, and with a
-//! violent shake that breaks most links.
+//! violent shake that breaks most links. The braid (§7.2, Fig. 6) and the brush (§7.4, Fig. 7)
+//! are in [`super::chang_fig6`] and [`super::chang_fig7`]; their scenes load through
+//! [`load_scene`] and [`scene_solver`] here.
 
 use std::path::Path;
 use std::sync::Arc;
@@ -10,10 +12,12 @@ use std::sync::Arc;
 use nalgebra::Point3;
 
 use super::{ExperimentDef, ExperimentOptions, ExperimentRun, FrameSink};
+use crate::model::HairModel;
 use crate::motion::Motion;
 use crate::scene::Scene;
-use crate::solver::guides::GuideSolver;
+use crate::solver::guides::{GuideParams, GuideSolver};
 use crate::solver::{Solver, SolverKind};
+use crate::style::LoadedStyle;
 
 /// `chang-shake`.
 pub static CHANG_SHAKE: ExperimentDef = ExperimentDef {
@@ -22,6 +26,46 @@ pub static CHANG_SHAKE: ExperimentDef = ExperimentDef {
     expectation: "shape_error_m: links < no_links; links_broken stays above links (its links are gone)",
     run: run_shake,
 };
+
+/// A compiled-in scene file (`scenes/….ron`, named `name` in errors): its style and model.
+pub(super) fn load_scene(name: &str, text: &str) -> anyhow::Result<(LoadedStyle, Arc<HairModel>)> {
+    let loaded = crate::style::parse(Path::new(name), text)?;
+    let model = HairModel::from_style(&loaded)?;
+    Ok((loaded, Arc::new(model)))
+}
+
+/// A guide solver on a head-less scene (the `still` motion: roots never move), with the
+/// scene's `guides:` section changed by `tweak`.
+pub(super) fn scene_solver(
+    loaded: &LoadedStyle,
+    model: &Arc<HairModel>,
+    tweak: impl FnOnce(&mut GuideParams),
+) -> anyhow::Result<GuideSolver> {
+    let mut gp = loaded.style.guides.clone();
+    tweak(&mut gp);
+    let motion = Motion::parse("still", Point3::from(model.scalp_center))?;
+    Ok(GuideSolver::new(
+        Arc::clone(model),
+        motion,
+        loaded.style.sim.clone(),
+        gp,
+    ))
+}
+
+/// The top-level wisp (a scene's named set of strands) each guide slot comes from; `u32::MAX`
+/// for a slot that holds no strand of the model.
+pub(super) fn guide_wisps(s: &GuideSolver) -> Vec<u32> {
+    let m = s.model();
+    s.origin
+        .iter()
+        .map(|o| match o {
+            crate::solver::guides::Origin::Strand(st) => {
+                m.finest().tree[m.strands.finest_gc[*st as usize] as usize]
+            }
+            _ => u32::MAX,
+        })
+        .collect()
+}
 
 /// A shake about the neck of `amp` degrees, `half` seconds per swing, for `swings` swings,
 /// then still.

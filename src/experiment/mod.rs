@@ -8,6 +8,8 @@
 
 pub mod awt_fig5;
 pub mod chang;
+pub mod chang_fig6;
+pub mod chang_fig7;
 pub mod plante;
 
 use crate::solver::{AdaptEvent, Solver};
@@ -87,6 +89,8 @@ pub fn all() -> Vec<&'static ExperimentDef> {
         &plante::PLANTE_FIG9,
         &awt_fig5::AWT_FIG5,
         &chang::CHANG_SHAKE,
+        &chang_fig6::CHANG_FIG6,
+        &chang_fig7::CHANG_FIG7,
     ]
 }
 

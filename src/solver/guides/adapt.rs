@@ -122,7 +122,7 @@ impl GuideSolver {
         // first sub-step's push-out becomes a whip.
         let mut pts = pts;
         let pose = self.pose;
-        self.posed_spheres(&pose);
+        self.posed_spheres(&pose, self.time);
         let lens = self.chains.len[slot * n..(slot + 1) * n].to_vec();
         let root = pose
             .transform_point(&nalgebra::Point3::from(self.chains.root_rest[slot]))

@@ -12,6 +12,7 @@ pub mod chain;
 pub mod dense;
 mod display;
 pub mod links;
+pub mod obstacle;
 pub mod params;
 mod solve;
 pub mod strips;
@@ -81,8 +82,6 @@ pub struct GuideSolver {
     time: f64,
     pose: Pose,
     settling: bool,
-    /// Extra spheres in world coordinates (an experiment's moving obstacle), beside the body.
-    pub obstacles: Vec<PosedSphere>,
     spheres: Vec<PosedSphere>,
     buf: Vec<Vector3<f64>>,
     qbuf: Vec<Vector2<f64>>,
@@ -179,7 +178,6 @@ impl GuideSolver {
             time: 0.0,
             pose: motion.pose(0.0),
             settling: false,
-            obstacles: Vec::new(),
             spheres: Vec::new(),
             buf: vec![Vector3::zeros(); n + 1],
             qbuf: vec![Vector2::zeros(); n],
@@ -384,7 +382,8 @@ impl GuideSolver {
         &self.rest_x[g * (n + 1)..(g + 1) * (n + 1)]
     }
 
-    fn posed_spheres(&mut self, pose: &Pose) {
+    /// The body spheres at `pose` and the obstacles (`guides.obstacles`) at time `t`.
+    fn posed_spheres(&mut self, pose: &Pose, t: f64) {
         self.spheres.clear();
         for sp in &self.model.body {
             let c = pose.transform_point(&Point3::from(Vector3::from(sp.center)));
@@ -395,7 +394,11 @@ impl GuideSolver {
                 spin: pose.angular_velocity,
             });
         }
-        self.spheres.extend_from_slice(&self.obstacles);
+        // While settling, the obstacles stay where they start.
+        let t = if self.settling { 0.0 } else { t };
+        for o in &self.gp.obstacles {
+            self.spheres.push(o.posed(t));
+        }
     }
 
     /// One sub-step of length `h` from `self.time`: forces, articulated-body dynamics,
@@ -420,7 +423,7 @@ impl GuideSolver {
                 .to_rotation_matrix()
                 .matrix()
         };
-        self.posed_spheres(&pose1);
+        self.posed_spheres(&pose1, t + h);
         let n = self.gp.segments;
         let drag = self.params.air_drag;
         for &g in &self.alive {

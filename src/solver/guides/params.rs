@@ -4,6 +4,8 @@
 
 use serde::{Deserialize, Serialize};
 
+use super::obstacle::MovingSphere;
+
 /// Which guides a triangle strip joins (§4.2, Fig. 3).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
 pub enum StripLayout {
@@ -109,6 +111,11 @@ pub struct GuideParams {
     /// Guides blended per dense strand (§5.1). Default 3.
     #[serde(default = "d_blend")]
     pub blend: usize,
+    /// Spheres that move on their own keyframed path, independently of the head and the roots
+    /// (the sphere hitting a brush, §7.4): `[(radius: 0.05, path: [(time: 0, center: (x, y,
+    /// z)), …])]`, world coordinates. Default: none.
+    #[serde(default)]
+    pub obstacles: Vec<MovingSphere>,
 }
 
 impl Default for GuideParams {
@@ -139,6 +146,7 @@ impl Default for GuideParams {
             insert_distance: d_insert_distance(),
             remove_distance: d_remove_distance(),
             blend: d_blend(),
+            obstacles: Vec::new(),
         }
     }
 }
@@ -305,6 +313,9 @@ pub fn validate(p: &GuideParams) -> Result<(), (String, String)> {
     }
     if p.blend < 1 || p.blend > 8 {
         return err("blend", format!("must be between 1 and 8, got {}", p.blend));
+    }
+    for (i, o) in p.obstacles.iter().enumerate() {
+        super::obstacle::validate(i, o).map_err(|(f, m)| (format!("guides.{f}"), m))?;
     }
     Ok(())
 }

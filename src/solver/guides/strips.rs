@@ -107,7 +107,7 @@ const BIAS: i64 = 1 << 20;
 /// Pairs more aligned than this orientation factor (about 11°) are not candidates: their
 /// repulsion would be almost zero (Eq. 3), and hair lying along hair is what the strips'
 /// interpolation already stands for. This keeps the contact count to the crossings.
-const MIN_CROSSING: f64 = 0.2;
+pub const MIN_CROSSING: f64 = 0.2;
 
 fn cell_key(c: [i64; 3]) -> u64 {
     let m = (1u64 << 21) - 1;

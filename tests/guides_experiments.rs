@@ -1,0 +1,147 @@
+//! The guide-strand paper's braid and brush experiments (Chang, Jin, Yu 2002, §7.2 Fig. 6 and
+//! §7.4 Fig. 7), shortened, and the moving obstacle they rely on.
+
+use serde_json::Value;
+use wisptree::experiment::{find, ExperimentOptions, ExperimentRun, NoFrames};
+use wisptree::solver::guides::obstacle::{MovingSphere, PathKey};
+
+fn run(name: &str, duration_scale: f64) -> Vec<ExperimentRun> {
+    let def = find(name).unwrap();
+    let runs = (def.run)(&ExperimentOptions { duration_scale }, &mut NoFrames).unwrap();
+    for r in &runs {
+        eprintln!("{name} {} {:?}", r.label, r.metrics);
+    }
+    runs
+}
+
+fn metric<'a>(runs: &'a [ExperimentRun], label: &str, m: &str) -> &'a Value {
+    &runs.iter().find(|r| r.label == label).unwrap().metrics[m]
+}
+
+/// Half the braid's 4 s. Without collision every strand of one set falls through the other
+/// set: the 3-turn twist is undone by passing, each of the 9 strands of a set past several of
+/// the other's 9, again and again as they swing (about 370 crossings in these 2 s, 440 in the
+/// full run); 100 is far below that and far above what a leak of the collision would give.
+/// With collision the sets never pass, so the twist is only undone by the end turning.
+#[test]
+fn chang_fig6_braid_crosses_only_without_collision() {
+    let runs = run("chang-fig6", 0.5);
+    let crossings = |l| metric(&runs, l, "crossings").as_u64().unwrap();
+    let f = |l, m| metric(&runs, l, m).as_f64().unwrap();
+    assert!(
+        crossings("no_collision") >= 100,
+        "{}",
+        crossings("no_collision")
+    );
+    assert!(crossings("collision") <= 3, "{}", crossings("collision"));
+    // No passing: the twist left is the twist undone by the free end, 3 turns at the start.
+    let left = f("collision", "twist_turns");
+    assert!(
+        (left - (3.0 + f("collision", "end_turns"))).abs() < 0.05,
+        "{left}"
+    );
+    assert!(
+        f("collision", "end_turns") < -0.2,
+        "the end turns to untwist"
+    );
+    assert!(
+        f("no_collision", "twist_turns").abs() < 0.5,
+        "untwisted by passing"
+    );
+}
+
+/// The sphere stops after 1 s; 4 s after it the interacting brush (3.6 s in the full run) is
+/// still, the other (4.9 s) still moving (`null`).
+#[test]
+fn chang_fig7_brush_settles_faster_with_interaction() {
+    let runs = run("chang-fig7", 0.5);
+    let settle = |l| metric(&runs, l, "settle_s").as_f64();
+    let with = settle("interaction").expect("the interacting brush settles");
+    assert!(with > 0.0);
+    if let Some(without) = settle("no_interaction") {
+        assert!(with < without, "{with} vs {without}");
+    }
+    for l in ["interaction", "no_interaction"] {
+        assert!(metric(&runs, l, "hairs_behind").as_u64().is_some());
+    }
+}
+
+#[test]
+fn moving_sphere_eases_between_keys_and_holds_the_ends() {
+    let o = MovingSphere {
+        radius: 0.1,
+        path: vec![
+            PathKey {
+                time: 1.0,
+                center: [0.0, 0.0, 0.0],
+            },
+            PathKey {
+                time: 3.0,
+                center: [0.0, 0.0, 2.0],
+            },
+        ],
+    };
+    let (c0, v0) = o.center_at(0.5);
+    assert_eq!((c0.z, v0.z), (0.0, 0.0));
+    let (c, v) = o.center_at(2.0);
+    assert!(
+        (c.z - 1.0).abs() < 1e-12 && (v.z - 1.5).abs() < 1e-12,
+        "{c} {v}"
+    );
+    let (c1, v1) = o.center_at(5.0);
+    assert_eq!((c1.z, v1.z), (2.0, 0.0));
+    // The velocity is the derivative of the position.
+    let h = 1e-6;
+    let fd = (o.center_at(1.7 + h).0 - o.center_at(1.7 - h).0) / (2.0 * h);
+    assert!((fd - o.center_at(1.7).1).norm() < 1e-6);
+    assert_eq!(o.stop_time(), 3.0);
+}
+
+#[test]
+fn bad_obstacles_are_errors_naming_the_field() {
+    let text = include_str!("../scenes/chang_fig7.ron");
+    for (from, to, field) in [
+        (
+            "(radius: 0.05,",
+            "(radius: -1.0,",
+            "guides.obstacles[0].radius",
+        ),
+        (
+            "(time: 1.0, center",
+            "(time: 0.0, center",
+            "guides.obstacles[0].path[1].time",
+        ),
+    ] {
+        let t = text.replacen(from, to, 1);
+        assert_ne!(t, text);
+        let err = wisptree::style::parse(std::path::Path::new("x.ron"), &t).unwrap_err();
+        let msg = err.to_string();
+        assert!(msg.contains("x.ron") && msg.contains(field), "{msg}");
+    }
+}
+
+/// The brush's strips join horizontal and vertical neighbours (§4.2, Fig. 3a): every guide of
+/// the 8 × 8 grid is joined to its +x and +z neighbours, 2 · 8 · 7 strips.
+#[test]
+fn brush_strips_join_both_grid_directions() {
+    let text = include_str!("../scenes/chang_fig7.ron");
+    let loaded = wisptree::style::parse(std::path::Path::new("chang_fig7.ron"), text).unwrap();
+    let model = std::sync::Arc::new(wisptree::model::HairModel::from_style(&loaded).unwrap());
+    let motion = wisptree::motion::Motion::parse("still", model.scalp_center.into()).unwrap();
+    let s = wisptree::solver::guides::GuideSolver::new(
+        model,
+        motion,
+        loaded.style.sim.clone(),
+        loaded.style.guides.clone(),
+    );
+    assert_eq!(s.alive().len(), 64);
+    assert_eq!(s.strips.pairs.len(), 2 * 8 * 7);
+    let n = s.guide_params().segments;
+    let (mut along_x, mut along_z) = (0, 0);
+    for &(a, b) in &s.strips.pairs {
+        let d = s.chains.x[b as usize * (n + 1)] - s.chains.x[a as usize * (n + 1)];
+        along_x += (d.x > 0.009 && d.z.abs() < 1e-9) as usize;
+        along_z += (d.z > 0.009 && d.x.abs() < 1e-9) as usize;
+    }
+    assert_eq!((along_x, along_z), (56, 56));
+}
