@@ -22,10 +22,11 @@ mod blueprint;
 mod colors;
 pub mod paths;
 pub mod sink;
+pub mod sweep_sink;
 
 pub use blueprint::{
-    blueprint, runs_blueprint, send_blueprint, send_blueprint_with, send_runs_blueprint,
-    spatial_view_blueprint_path, BlueprintCamera,
+    blueprint, label_run_series, runs_blueprint, send_blueprint, send_blueprint_with,
+    send_runs_blueprint, spatial_view_blueprint_path, BlueprintCamera, RunView, RUN_ACTIVE_TOTAL,
 };
 pub use colors::level_color;
 use colors::*;
