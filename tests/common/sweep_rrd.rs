@@ -46,7 +46,9 @@ pub fn read_rrd(path: &Path) -> Rrd {
     r
 }
 
-pub type Cells = BTreeMap<(String, String, Option<i64>), Vec<ArrayRef>>;
+/// (entity, component, frame; `None` for static and blueprint data).
+pub type CellKey = (String, String, Option<i64>);
+pub type Cells = BTreeMap<CellKey, Vec<ArrayRef>>;
 
 /// Every logged cell by (entity, component, frame; `None` for static and blueprint data), the
 /// cells of one key in a fixed order.
@@ -84,7 +86,7 @@ pub fn cell_text(cells: &Cells, entity_prefix: &str, component_part: &str) -> Ve
 }
 
 /// The cells of run `label` (its subtree), without the step time (wall-clock timing).
-pub fn run_cells(all: &Cells, label: &str) -> Vec<((String, String, Option<i64>), Vec<ArrayRef>)> {
+pub fn run_cells(all: &Cells, label: &str) -> Vec<(CellKey, Vec<ArrayRef>)> {
     let prefix = format!("/runs/{label}/");
     all.iter()
         .filter(|((e, _, _), _)| e.starts_with(&prefix) && !e.ends_with("/stats/step_ms"))
