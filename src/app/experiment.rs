@@ -6,14 +6,12 @@ use std::path::PathBuf;
 
 use anyhow::Context as _;
 
+use super::runs_log::RunLog;
 use crate::error::BadInput;
 use crate::experiment::{self, ExperimentOptions, ExperimentReport, FrameSink};
-use crate::frame::Frame;
-use crate::pipeline::{self, FrameBuilder};
 use crate::report::AdaptEvent;
 use crate::solver::Solver;
 use crate::stream::sink::{open_sink, Recording, SinkChoice};
-use crate::stream::{Logger, LoggerSetup};
 
 /// Strands drawn per frame of an experiment (small scenes: all of them, up to this).
 const EXPERIMENT_STRANDS: usize = 2000;
@@ -29,15 +27,6 @@ pub struct ExperimentCommand {
     pub save: Option<PathBuf>,
     /// Write the numbers as JSON here.
     pub json: Option<PathBuf>,
-}
-
-/// One run's logger and frame state in the recording.
-struct RunLog {
-    label: String,
-    logger: Logger,
-    builder: FrameBuilder,
-    frame: Frame,
-    index: u64,
 }
 
 /// Logs every run's frames into one recording, each under `/runs/<label>`.
@@ -56,33 +45,25 @@ impl FrameSink for RecordingSink {
         let i = match self.runs.iter().position(|r| r.label == label) {
             Some(i) => i,
             None => {
+                // Framed on this run's own hair: an experiment scene is not a head.
+                let camera = super::runs_log::solver_camera(solver);
                 let model = solver.model().clone();
-                let mut setup = LoggerSetup::new(model.level_count() as u16, label, [0.0; 3]);
-                setup.prefix = format!("/runs/{label}");
-                setup.send_blueprint = false;
-                self.runs.push(RunLog {
-                    label: label.to_owned(),
-                    logger: Logger::new(self.rec.clone(), &setup)?,
-                    builder: FrameBuilder::new(
-                        &model,
-                        EXPERIMENT_STRANDS,
-                        super::STRAND_SUBDIVISIONS,
-                    ),
-                    frame: Frame::default(),
-                    index: 0,
-                });
-                self.runs.len() - 1
+                let slot = self.runs.len();
+                self.runs.push(RunLog::new(
+                    &self.rec,
+                    label,
+                    slot,
+                    &model,
+                    EXPERIMENT_STRANDS,
+                    camera,
+                )?);
+                slot
             }
         };
         let r = &mut self.runs[i];
         r.frame.events.clear();
         r.frame.events.extend_from_slice(events);
-        r.builder.fill(solver, &mut r.frame);
-        r.frame.index = r.index;
-        pipeline::fill_stats(&mut r.frame, solver.params());
-        r.logger.log_frame(&r.frame)?;
-        r.index += 1;
-        Ok(())
+        r.log(solver)
     }
 }
 
@@ -115,10 +96,15 @@ pub fn run(cmd: &ExperimentCommand) -> anyhow::Result<()> {
                 runs: Vec::new(),
             };
             let runs = (def.run)(&opts, &mut sink)?;
-            let labels: Vec<String> = runs.iter().map(|r| r.label.clone()).collect();
-            crate::stream::send_runs_blueprint(&rec, &labels)?;
+            // In the experiment's order; a run that logged no frame has no view.
+            let views: Vec<_> = runs
+                .iter()
+                .filter_map(|r| sink.runs.iter().find(|l| l.label == r.label))
+                .map(|l| l.view(false))
+                .collect();
+            super::runs_log::send_layout(&rec, &views, None)?;
             for r in &sink.runs {
-                r.logger.flush()?;
+                r.flush()?;
             }
             eprintln!("wrote {}", path.display());
             runs

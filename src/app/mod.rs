@@ -1,5 +1,5 @@
 //! The commands that run a simulation: `wisptree run` (simulation and logging threads, keys,
-//! style reload, stop) and `wisptree export`.
+//! style reload, stop), `wisptree export`, `wisptree experiment` and `wisptree sweep`.
 
 mod console;
 pub mod experiment;
@@ -9,8 +9,11 @@ mod reload;
 pub mod render_cmd;
 pub mod render_thread;
 pub mod run;
+pub mod runs_log;
 mod sim_thread;
 pub mod stop;
+pub mod sweep;
+pub mod sweep_plan;
 pub mod threads;
 pub mod tune;
 

@@ -9,6 +9,7 @@ mod export_args;
 mod inspect;
 mod render_args;
 mod styles;
+mod sweep_args;
 
 use clap::{Parser, Subcommand};
 
@@ -19,6 +20,7 @@ pub use export_args::ExportArgs;
 pub use inspect::{summarize, InspectArgs, ModelSummary};
 pub use render_args::RenderArgs;
 pub use styles::StylesArgs;
+pub use sweep_args::SweepArgs;
 
 pub use crate::error::{BadInput, EXIT_BAD_INPUT};
 
@@ -59,6 +61,9 @@ pub enum Command {
     Render(RenderArgs),
     /// Run one of the papers' experiments, record it and print the number it demonstrates.
     Experiment(ExperimentArgs),
+    /// Run several configurations (split and merge thresholds, models, or named variants) side
+    /// by side into one recording, one subtree `/runs/<label>` each, and print their numbers.
+    Sweep(SweepArgs),
 }
 
 /// Runs the command line; returns the process exit code.
@@ -71,6 +76,7 @@ pub fn main() -> i32 {
         Some(Command::Bench(a)) => a.options().and_then(|o| crate::bench::run(&o)),
         Some(Command::Render(a)) => crate::app::render_cmd::run(&a.command()).map(|_| ()),
         Some(Command::Experiment(a)) => crate::app::experiment::run(&a.command()),
+        Some(Command::Sweep(a)) => crate::app::sweep::run(&a.command()),
         Some(Command::Export(a)) => crate::app::export::run(&a.options(), !a.no_progress),
         None => crate::app::run(cli.run.options()),
     };

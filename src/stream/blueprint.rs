@@ -33,7 +33,8 @@ struct ViewSpec {
     contents: &'static [&'static str],
 }
 
-const SPATIAL_CONTENTS: &[&str] = &["+ /hair/**", "+ /body/**", "+ /head/**", "+ /events/**"];
+pub(super) const SPATIAL_CONTENTS: &[&str] =
+    &["+ /hair/**", "+ /body/**", "+ /head/**", "+ /events/**"];
 /// Time series are grouped by magnitude, so that no series flattens another: node counts
 /// (hundreds to thousands) with the adaptation events per frame, collision work (pairs tested
 /// run to 10⁵–10⁶) apart from them, the small real-valued quantities together, and the
@@ -164,7 +165,7 @@ fn blueprint_uuid(k: u8) -> Uuid {
     Uuid { bytes }
 }
 
-fn uuid_string(u: &Uuid) -> String {
+pub(super) fn uuid_string(u: &Uuid) -> String {
     let b = &u.bytes;
     let mut s = String::with_capacity(36);
     for (i, byte) in b.iter().enumerate() {
@@ -337,7 +338,7 @@ pub fn send_blueprint_with(
 
 /// The side panels start collapsed and the time panel as a bar: the hair and the plots get the
 /// room; all of them open again from the viewer's top-right buttons.
-fn log_panels(bp: &RecordingStream) -> anyhow::Result<()> {
+pub(super) fn log_panels(bp: &RecordingStream) -> anyhow::Result<()> {
     bp.log(
         "blueprint_panel",
         &PanelBlueprint::new().with_state(PANEL_STATES.0),
@@ -354,7 +355,7 @@ fn log_panels(bp: &RecordingStream) -> anyhow::Result<()> {
 }
 
 /// Sends the blueprint messages to `rec` as its active and default blueprint.
-fn activate(rec: &RecordingStream, msgs: Vec<LogMsg>) -> anyhow::Result<()> {
+pub(super) fn activate(rec: &RecordingStream, msgs: Vec<LogMsg>) -> anyhow::Result<()> {
     let blueprint_id = msgs
         .iter()
         .find_map(|m| match m {
@@ -371,53 +372,6 @@ fn activate(rec: &RecordingStream, msgs: Vec<LogMsg>) -> anyhow::Result<()> {
         },
     );
     Ok(())
-}
-
-/// The layout of a recording of several runs (`/runs/<label>/…`): one 3D view per run in a
-/// grid, each showing its own subtree, above one time series overlaying every run's stats.
-pub fn runs_blueprint(labels: &[String]) -> rerun::blueprint::Blueprint {
-    use rerun::blueprint::{
-        Blueprint, ContainerLike, Grid, Spatial3DView, TimePanel, TimeSeriesView, Vertical,
-    };
-    let views: Vec<ContainerLike> = labels
-        .iter()
-        .map(|l| {
-            let origin = format!("/runs/{l}");
-            Spatial3DView::new(l.as_str())
-                .with_origin(origin.as_str())
-                .with_contents([
-                    format!("+ {origin}/hair/**"),
-                    format!("+ {origin}/body/**"),
-                    format!("+ {origin}/head/**"),
-                    format!("+ {origin}/events/**"),
-                ])
-                .into()
-        })
-        .collect();
-    let columns = (labels.len() as f64).sqrt().ceil().max(1.0) as u32;
-    let series = TimeSeriesView::new("every run")
-        .with_origin("/runs")
-        .with_contents(labels.iter().map(|l| format!("+ /runs/{l}/stats/**")));
-    Blueprint::new(
-        Vertical::new([
-            Grid::new(views).with_grid_columns(columns).into(),
-            series.into(),
-        ])
-        .with_row_shares([3.0, 1.0]),
-    )
-    .with_auto_layout(false)
-    .with_auto_views(false)
-    .with_time_panel(TimePanel::new().with_state(PanelState::Collapsed))
-}
-
-/// Sends [`runs_blueprint`] as the recording's active and default layout.
-pub fn send_runs_blueprint(rec: &super::sink::Recording, labels: &[String]) -> anyhow::Result<()> {
-    runs_blueprint(labels)
-        .send(
-            rec.stream(),
-            rerun::blueprint::BlueprintActivation::default(),
-        )
-        .context("sending the blueprint")
 }
 
 /// The 2D view of the rendered hair (`/render/hair`).

@@ -21,15 +21,19 @@
 mod blueprint;
 mod colors;
 pub mod paths;
+mod runs_layout;
 pub mod sink;
+pub mod sweep_sink;
 
 pub use blueprint::{
-    blueprint, runs_blueprint, send_blueprint, send_blueprint_with, send_runs_blueprint,
-    spatial_view_blueprint_path, BlueprintCamera,
+    blueprint, send_blueprint, send_blueprint_with, spatial_view_blueprint_path, BlueprintCamera,
 };
 pub use colors::level_color;
 use colors::*;
 pub use paths::{TIMELINE_FRAME, TIMELINE_SIM_TIME};
+pub use runs_layout::{
+    label_run_series, runs_blueprint, send_runs_blueprint, RunView, RUN_ACTIVE_TOTAL,
+};
 
 use std::fmt::Write as _;
 

@@ -1,0 +1,106 @@
+//! `wisptree sweep` flags.
+
+use std::path::PathBuf;
+
+use clap::builder::TypedValueParser as _;
+
+use super::args::{parse_seconds, parse_size, SinkArgs};
+use crate::app::run::{DEFAULT_MOTION, DEFAULT_STYLE};
+use crate::app::sweep::{SweepCommand, DEFAULT_SWEEP_STRANDS};
+use crate::app::sweep_plan::{SweepLists, SweepSource};
+
+/// `wisptree sweep` arguments.
+#[derive(Debug, Clone, clap::Args)]
+pub struct SweepArgs {
+    /// The hairstyle every run simulates (as `wisptree run --style`).
+    #[arg(long, value_name = "NAME|PATH", default_value = DEFAULT_STYLE)]
+    pub style: String,
+
+    /// The head and body motion of every run (as `wisptree run --motion`).
+    #[arg(long, value_name = "NAME|PATH", default_value = DEFAULT_MOTION)]
+    pub motion: String,
+
+    /// Simulated seconds of every run.
+    #[arg(long, value_name = "S", default_value_t = 10.0, value_parser = parse_seconds)]
+    pub seconds: f64,
+
+    /// Split thresholds to sweep (`sim.split_threshold`, m²/s², ≥ 0), comma-separated:
+    /// `--split 0.1,0.2,0.3`.
+    #[arg(long, value_name = "LIST", allow_hyphen_values = true)]
+    pub split: Option<String>,
+
+    /// Merge velocity thresholds to sweep (`sim.merge_velocity`, m/s, ≥ 0), comma-separated.
+    #[arg(long, value_name = "LIST", allow_hyphen_values = true)]
+    pub merge: Option<String>,
+
+    /// Models to sweep, comma-separated: awt, single-level, layered, guides (default: awt).
+    #[arg(long, value_name = "LIST")]
+    pub model: Option<String>,
+
+    /// Named variants instead of the lists: a RON file
+    /// `[(label: "soft", split: 0.1, merge: 0.05, model: "awt"), …]` (every field optional).
+    #[arg(long, value_name = "FILE.ron", conflicts_with_all = ["split", "merge", "model"])]
+    pub variants: Option<PathBuf>,
+
+    /// Run configuration K alone (from 0, in the order --list prints), for a batch scheduler:
+    /// every part of one sweep has the same recording id, so `rerun rrd merge` joins them.
+    #[arg(long, value_name = "K")]
+    pub only: Option<usize>,
+
+    /// Print the configurations, numbered as --only counts them, and stop.
+    #[arg(long)]
+    pub list: bool,
+
+    /// Render the hair of every frame of every run (off in sweeps: it costs more than the
+    /// simulation).
+    #[arg(long)]
+    pub render: bool,
+
+    /// Size of the rendered images with --render, WIDTHxHEIGHT pixels.
+    #[arg(long, value_name = "WxH", default_value = "640x480", value_parser = parse_size)]
+    pub render_size: (u32, u32),
+
+    /// Hair strands drawn per frame of each run.
+    #[arg(long, value_name = "N", default_value_t = DEFAULT_SWEEP_STRANDS,
+          value_parser = clap::value_parser!(u64).range(1..).map(|v| v as usize))]
+    pub strands: usize,
+
+    /// Runs at once (default: one per core). The results do not depend on it.
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..1025).map(|v| v as usize))]
+    pub jobs: Option<usize>,
+
+    /// No progress bar.
+    #[arg(long)]
+    pub no_progress: bool,
+
+    /// Where the recording goes.
+    #[command(flatten)]
+    pub sink: SinkArgs,
+}
+
+impl SweepArgs {
+    /// The plain command.
+    pub fn command(&self) -> SweepCommand {
+        let source = match &self.variants {
+            Some(p) => SweepSource::Variants(p.clone()),
+            None => SweepSource::Lists(SweepLists {
+                model: self.model.clone(),
+                split: self.split.clone(),
+                merge: self.merge.clone(),
+            }),
+        };
+        SweepCommand {
+            style: self.style.clone(),
+            motion: self.motion.clone(),
+            seconds: self.seconds,
+            source,
+            only: self.only,
+            list: self.list,
+            render: self.render.then_some(self.render_size),
+            strands: self.strands,
+            jobs: self.jobs,
+            progress: !self.no_progress,
+            sink: self.sink.choice(),
+        }
+    }
+}
