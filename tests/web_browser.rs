@@ -2,8 +2,8 @@
 //! (`chromedriver`, Debian's `chromium-driver`; `.ci/run` installs both). It moves the split
 //! threshold slider with the pointer and checks that the simulation takes the value, that an
 //! out-of-range value typed in is refused on the page, that a second tab shows the change, and
-//! it takes a screenshot of the page at 1280×800 (`target/web_page.png`; with
-//! `WISPTREE_DOCS_SHOT=1`, also `docs/web.png`).
+//! it takes a screenshot of the page at 1280×800 (`target/web_page.png`). With
+//! `WISPTREE_DOCS_SHOT=1` it also writes README's `docs/web.png`, the page with the viewer.
 
 mod web_common;
 
@@ -23,6 +23,10 @@ struct Driver {
 
 impl Driver {
     fn start() -> Driver {
+        Driver::start_with(&[])
+    }
+
+    fn start_with(extra_args: &[String]) -> Driver {
         let port = std::net::TcpListener::bind("127.0.0.1:0")
             .unwrap()
             .local_addr()
@@ -50,15 +54,26 @@ impl Driver {
             );
             std::thread::sleep(Duration::from_millis(100));
         }
+        let mut args: Vec<String> = [
+            "--headless=new",
+            "--no-sandbox",
+            "--disable-dev-shm-usage",
+            "--window-size=1280,800",
+            "--hide-scrollbars",
+            "--use-angle=swiftshader",
+            "--enable-unsafe-swiftshader",
+        ]
+        .iter()
+        .map(|a| a.to_string())
+        .collect();
+        args.extend_from_slice(extra_args);
         let caps = json!({"capabilities": {"alwaysMatch": {
             "browserName": "chrome",
             // Do not wait for the embedded viewer's 40 MB of wasm to load.
             "pageLoadStrategy": "eager",
             "goog:chromeOptions": {
                 "binary": "/usr/bin/chromium",
-                "args": ["--headless=new", "--no-sandbox", "--disable-dev-shm-usage",
-                         "--window-size=1280,800", "--hide-scrollbars",
-                         "--use-angle=swiftshader", "--enable-unsafe-swiftshader"]
+                "args": args
             }
         }}});
         let v = d.call("POST", "/session", Some(caps));
@@ -251,10 +266,6 @@ fn the_page_moves_the_simulation_refuses_bad_values_and_keeps_tabs_in_agreement(
         .unwrap();
     let target = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("target/web_page.png");
     std::fs::write(&target, &bytes).unwrap();
-    if std::env::var_os("WISPTREE_DOCS_SHOT").is_some() {
-        let docs = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("docs/web.png");
-        std::fs::write(docs, &bytes).unwrap();
-    }
     let img = image::load_from_memory(&bytes).unwrap().to_rgb8();
     assert_eq!((img.width(), img.height()), (1280, 800));
     // The panel is not blank: many distinct colours (text, sliders, buttons).
@@ -271,5 +282,30 @@ fn the_page_moves_the_simulation_refuses_bad_values_and_keeps_tabs_in_agreement(
         colours.len()
     );
     drop(d);
+    if std::env::var_os("WISPTREE_DOCS_SHOT").is_some() {
+        docs_shot(&mut run);
+    }
     assert!(run.interrupt().success());
+}
+
+/// README's picture: the page with the viewer, the run paused so that the viewer (rendering in
+/// software here) settles, its frame in a process of its own.
+fn docs_shot(run: &mut WebRun) {
+    let line = run.wait_line("Rerun web viewer on port", Duration::from_secs(1));
+    let viewer_port: u16 = line
+        .split("viewer on port ")
+        .nth(1)
+        .and_then(|r| r.split(',').next())
+        .and_then(|p| p.trim().parse().ok())
+        .expect("the viewer's port");
+    assert_eq!(run.control(r#"{"type":"pause","paused":true}"#).status, 200);
+    let d = Driver::start_with(&[format!("--isolate-origins=http://127.0.0.1:{viewer_port}")]);
+    d.call("POST", "/url", Some(json!({"url": run.url()})));
+    std::thread::sleep(Duration::from_secs(60));
+    let png = d.call("GET", "/screenshot", None);
+    let bytes = base64::engine::general_purpose::STANDARD
+        .decode(png.as_str().unwrap())
+        .unwrap();
+    let docs = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("docs/web.png");
+    std::fs::write(docs, &bytes).unwrap();
 }

@@ -57,6 +57,11 @@ impl FrameSink for RecordingSink {
                     EXPERIMENT_STRANDS,
                     camera,
                 )?);
+                // The layout so far, at once: a viewer opening the file (or still loading it)
+                // shows the runs' views rather than its own guess; the last one sent, after
+                // the last run, has them all.
+                let views: Vec<_> = self.runs.iter().map(|l| l.view(false)).collect();
+                super::runs_log::send_layout(&self.rec, &views, None)?;
                 slot
             }
         };

@@ -210,8 +210,12 @@ fn start_page(
     )?;
     let url = page.url();
     console.say(&format!(
-        "control page: {url}\n    Rerun web viewer on port {}, gRPC server on port {} (all on {})",
-        viewer.viewer_port, viewer.grpc_port, w.bind
+        "control page: {url}\n    Rerun web viewer on port {}, gRPC server on port {} (all on {}); \
+         the viewer alone: {}",
+        viewer.viewer_port,
+        viewer.grpc_port,
+        w.bind,
+        viewer.url()
     ));
     if w.open {
         if let Err(e) = webbrowser::open(&url) {

@@ -161,7 +161,8 @@ pub fn run(cmd: &SweepCommand) -> anyhow::Result<()> {
     }
     let scene = Scene::load(&cmd.style, &cmd.motion, crate::solver::SolverKind::Awt)?;
     let id = sweep_plan::recording_id(&cmd.identity(&configs));
-    let sink = crate::stream::sweep_sink::open_sink_with_id(&cmd.sink, &id)?;
+    let mut sink = crate::stream::sweep_sink::open_sink_with_id(&cmd.sink, &id)?;
+    let web = sink.web.take();
     eprintln!(
         "wisptree sweep: style {}, motion `{}`, {} s ({} frames), {} of {} configurations → {}",
         scene.style_name(),
@@ -174,6 +175,9 @@ pub fn run(cmd: &SweepCommand) -> anyhow::Result<()> {
     );
     for &k in &todo {
         eprintln!("{k:>5}  {}", configs[k].label);
+    }
+    if let Some(w) = &web {
+        eprintln!("open the sweep in a browser: {}", w.url());
     }
     let stop = StopSignal::new();
     super::stop_on_ctrl_c(&stop)?;
@@ -191,6 +195,13 @@ pub fn run(cmd: &SweepCommand) -> anyhow::Result<()> {
     }
     if stop.is_stopped() {
         anyhow::bail!("stopped early (Ctrl-C)");
+    }
+    if let Some(w) = &web {
+        // The viewer reads the recording from the gRPC server: keep both up until Ctrl-C.
+        eprintln!("serving the sweep at {} until Ctrl-C", w.url());
+        while !stop.is_stopped() {
+            std::thread::sleep(std::time::Duration::from_millis(100));
+        }
     }
     Ok(())
 }

@@ -114,7 +114,7 @@ impl RunArgs {
                 self.sink.choice()
             },
             render: (!self.no_render).then_some(self.render_size),
-            web: self.web.web.then(|| WebOptions {
+            web: self.web.web.then_some(WebOptions {
                 bind: self.web.bind,
                 port: self.web.port,
                 open: self.web.open,

@@ -8,6 +8,7 @@ use super::args::{parse_seconds, parse_size, SinkArgs};
 use crate::app::run::{DEFAULT_MOTION, DEFAULT_STYLE};
 use crate::app::sweep::{SweepCommand, DEFAULT_SWEEP_STRANDS};
 use crate::app::sweep_plan::{SweepLists, SweepSource};
+use crate::stream::sink::SinkChoice;
 
 /// `wisptree sweep` arguments.
 #[derive(Debug, Clone, clap::Args)]
@@ -76,6 +77,15 @@ pub struct SweepArgs {
     /// Where the recording goes.
     #[command(flatten)]
     pub sink: SinkArgs,
+
+    /// Serve the sweep in the Rerun web viewer (a gRPC server and the viewer, on free ports of
+    /// --bind), and keep serving it after the runs end, until Ctrl-C.
+    #[arg(long, conflicts_with_all = ["spawn", "connect", "save", "stdout"])]
+    pub web: bool,
+
+    /// The address --web listens on (only this machine by default).
+    #[arg(long, value_name = "IP", default_value = "127.0.0.1", requires = "web")]
+    pub bind: std::net::IpAddr,
 }
 
 impl SweepArgs {
@@ -100,7 +110,11 @@ impl SweepArgs {
             strands: self.strands,
             jobs: self.jobs,
             progress: !self.no_progress,
-            sink: self.sink.choice(),
+            sink: if self.web {
+                SinkChoice::Web(self.bind)
+            } else {
+                self.sink.choice()
+            },
         }
     }
 }

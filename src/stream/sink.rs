@@ -101,6 +101,25 @@ pub struct WebViewer {
     _server: Box<dyn std::any::Any + Send>,
 }
 
+impl WebViewer {
+    /// The web viewer's page, connected to the gRPC server.
+    pub fn url(&self) -> String {
+        let host = loopback_for(self.bind);
+        let source = format!("rerun+http://{host}:{}/proxy", self.grpc_port);
+        let encoded: String = source
+            .bytes()
+            .map(|b| {
+                if b.is_ascii_alphanumeric() {
+                    (b as char).to_string()
+                } else {
+                    format!("%{b:02X}")
+                }
+            })
+            .collect();
+        format!("http://{host}:{}/?url={encoded}", self.viewer_port)
+    }
+}
+
 /// A recording stream, opaque outside `stream`.
 #[derive(Clone)]
 pub struct Recording(pub RecordingStream);

@@ -123,8 +123,9 @@ pub enum WebRequest {
         /// Paused after the request.
         paused: bool,
     },
-    /// Restart the simulation with the parameters in force.
-    Restart,
+    /// Restart the simulation with the parameters in force. (A struct variant, so that extra
+    /// fields are refused like everywhere else.)
+    Restart {},
     /// Restart under another motion preset.
     Motion {
         /// A preset name.
@@ -189,9 +190,9 @@ pub fn check_request(req: WebRequest, state: &LiveState) -> Result<WebCommand, S
             Ok(WebCommand::Set(spec.param, v))
         }
         WebRequest::Pause { paused } => Ok(WebCommand::Pause(paused)),
-        WebRequest::Restart => Ok(WebCommand::Restart),
+        WebRequest::Restart {} => Ok(WebCommand::Restart),
         WebRequest::Motion { name } => {
-            if state.motions.iter().any(|m| *m == name) {
+            if state.motions.contains(&name) {
                 Ok(WebCommand::Motion(name))
             } else {
                 Err(format!(
