@@ -4,11 +4,15 @@
 
 #[path = "common/rrd.rs"]
 mod rrd;
+#[path = "common/tiny_style.rs"]
+mod tiny_style;
 
 use std::collections::BTreeMap;
 use std::io::BufReader;
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
+
+use tiny_style::tiny_style;
 
 use rerun::external::re_log_types::LogMsg;
 use rerun::log::Chunk;
@@ -23,34 +27,7 @@ use wisptree::solver::SolverKind;
 use wisptree::stream::paths;
 use wisptree::stream::sink::SinkChoice;
 
-/// A small generated style: 4 top-level wisps, 2 levels, K = 8, about 300 strands. Simulates a
-/// second in a fraction of a second, and splits under `shake`.
-const TINY: &str = r#"Style(
-    name: "tiny",
-    seed: 7,
-    hair: Generated((
-        density: 3.0,
-        samples: 12,
-        wisps: [
-        (
-            name: "back",
-            region: (azimuth: (140, 220), elevation: (0, 70)),
-            tiles: (2, 2),
-            key_strand: [(0.03, 0.0, 0.0), (0.08, 0.02, 0.0), (0.16, 0.04, 0.0), (0.24, 0.05, 0.0)],
-            tip_spread: 0.01,
-        ),
-        ],
-    )),
-    hierarchy: (levels: 2, cross_sections: 8, branching: [4]),
-    link: Rigid(iterations: 8),
-    sim: (split_threshold: SPLIT, merge_velocity: 0.05),
-)
-"#;
-
-fn tiny_style(split: &str) -> String {
-    TINY.replace("SPLIT", split)
-}
-
+// The style: `tiny_style` (tests/common/tiny_style.rs), which splits under `shake`.
 const MOTION: &str = "shake";
 const STRANDS: usize = 20;
 

@@ -4,6 +4,8 @@
 
 #[path = "common/sweep_rrd.rs"]
 mod sweep_rrd;
+#[path = "common/tiny_style.rs"]
+mod tiny_style;
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -11,32 +13,9 @@ use std::process::Command;
 use sweep_rrd::{assert_same_run, cell_text, cells, node_positions, read_rrd, run_cells};
 use wisptree::app::sweep_plan::{label_ok, parse_variants, product, recording_id, SweepLists};
 
-/// The tiny style of tests/run.rs: 4 top-level wisps, 2 levels, K = 8, about 300 strands.
-const TINY: &str = r#"Style(
-    name: "tiny",
-    seed: 7,
-    hair: Generated((
-        density: 3.0,
-        samples: 12,
-        wisps: [
-        (
-            name: "back",
-            region: (azimuth: (140, 220), elevation: (0, 70)),
-            tiles: (2, 2),
-            key_strand: [(0.03, 0.0, 0.0), (0.08, 0.02, 0.0), (0.16, 0.04, 0.0), (0.24, 0.05, 0.0)],
-            tip_spread: 0.01,
-        ),
-        ],
-    )),
-    hierarchy: (levels: 2, cross_sections: 8, branching: [4]),
-    link: Rigid(iterations: 8),
-    sim: (split_threshold: 0.3, merge_velocity: 0.05),
-)
-"#;
-
 fn tiny(dir: &Path) -> PathBuf {
     let p = dir.join("tiny.ron");
-    std::fs::write(&p, TINY).unwrap();
+    std::fs::write(&p, tiny_style::tiny_style("0.3")).unwrap();
     p
 }
 

@@ -20,8 +20,9 @@ pub struct RunArgs {
     #[arg(long, value_name = "NAME|PATH", default_value = DEFAULT_MOTION)]
     pub motion: String,
 
-    /// The hair model: `awt` (Adaptive Wisp Tree) or `single-level` (the AWT with every
-    /// finest node active, no adaptation).
+    /// The hair model: `awt` (Adaptive Wisp Tree), `single-level` (the AWT with every finest
+    /// node active, no adaptation), `layered` (Plante et al.'s layered wisps) or `guides`
+    /// (Chang et al.'s guide strands).
     #[arg(long, value_name = "MODEL", default_value = "awt", value_parser = parse_model)]
     pub model: SolverKind,
 
