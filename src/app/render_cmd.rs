@@ -41,7 +41,7 @@ pub fn run(cmd: &RenderCommand) -> anyhow::Result<u64> {
         scene.loaded.style.render.clone(),
         cmd.size.0,
         cmd.size.1,
-        crate::solver::awt::default_threads().max(2),
+        crate::render::default_threads(),
     )
     .map_err(|e| BadInput(format!("rendering: {e}")))?;
     let camera = super::render_thread::scene_camera(&scene);

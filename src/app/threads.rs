@@ -162,7 +162,7 @@ fn start_workers(
                 scene.loaded.style.render.clone(),
                 w,
                 h,
-                crate::solver::awt::default_threads(),
+                crate::render::default_threads(),
             )
             .map_err(|e| crate::error::BadInput(format!("rendering: {e}")))?;
             let thread = super::render_thread::RenderThread {
