@@ -250,6 +250,11 @@ pub fn sweep_into(
         } else {
             crate::solver::awt::default_threads()
         },
+        render_threads: if workers > 1 {
+            1
+        } else {
+            crate::render::default_threads()
+        },
         bar: &bar,
         stop,
     };
@@ -291,7 +296,10 @@ struct RunJob<'a> {
     frames: u64,
     strands: usize,
     render: Option<(u32, u32)>,
+    /// Solver threads of each run.
     threads: usize,
+    /// Renderer threads of each run.
+    render_threads: usize,
     bar: &'a indicatif::ProgressBar,
     stop: &'a StopSignal,
 }
@@ -379,7 +387,7 @@ fn run_one(job: &RunJob, k: usize, cfg: &SweepConfig) -> anyhow::Result<RunStats
         log.frame.messages.push(msg);
     }
     let mut render = match job.render {
-        Some((w, h)) => Some(RunRender::new(&scene, w, h)?),
+        Some((w, h)) => Some(RunRender::new(&scene, w, h, job.render_threads)?),
         None => None,
     };
     let mut report = solver.new_report();
@@ -404,7 +412,8 @@ fn run_one(job: &RunJob, k: usize, cfg: &SweepConfig) -> anyhow::Result<RunStats
     Ok(stats)
 }
 
-/// A run's renderer (`--render`): every strand of the model, the scene's camera, one thread.
+/// A run's renderer (`--render`): every strand of the model, the scene's camera; one thread
+/// when runs go side by side, else every core.
 struct RunRender {
     renderer: crate::render::Renderer,
     camera: crate::render::Camera,
@@ -413,10 +422,15 @@ struct RunRender {
 }
 
 impl RunRender {
-    fn new(scene: &Scene, w: u32, h: u32) -> anyhow::Result<RunRender> {
+    fn new(scene: &Scene, w: u32, h: u32, threads: usize) -> anyhow::Result<RunRender> {
         Ok(RunRender {
-            renderer: crate::render::Renderer::new(scene.loaded.style.render.clone(), w, h, 1)
-                .map_err(|e| BadInput(format!("rendering: {e}")))?,
+            renderer: crate::render::Renderer::new(
+                scene.loaded.style.render.clone(),
+                w,
+                h,
+                threads,
+            )
+            .map_err(|e| BadInput(format!("rendering: {e}")))?,
             camera: super::render_thread::scene_camera(scene),
             builder: pipeline::FrameBuilder::new(
                 &scene.model,
