@@ -117,7 +117,6 @@ struct Worker {
     buf: TileBuf,
     sorted: Vec<raster::SegRec>,
     tmp: Vec<raster::SegRec>,
-    pixels: Vec<f32>,
     raster_ns: u64,
     resolve_ns: u64,
 }
@@ -134,7 +133,10 @@ pub struct Renderer {
     bins: Bins,
     prims: Vec<body::Prim>,
     workers: Vec<Mutex<Worker>>,
-    tiles: Vec<Mutex<Vec<u8>>>,
+    /// Per tile, its resolved linear pixels (TILE² × 3).
+    tiles: Vec<Mutex<Vec<f32>>>,
+    /// The whole frame's linear pixels, gathered from the tiles for the postfilter.
+    linear: Vec<f32>,
     lut: Vec<u8>,
     times: StageTimes,
     /// Per-strand linear colours; empty: every strand has `params.hair_color`.
@@ -175,14 +177,13 @@ impl Renderer {
                     buf: TileBuf::default(),
                     sorted: Vec::new(),
                     tmp: Vec::new(),
-                    pixels: Vec::new(),
                     raster_ns: 0,
                     resolve_ns: 0,
                 })
             })
             .collect();
         let tiles = (0..grid.tiles())
-            .map(|_| Mutex::new(vec![0u8; TILE * TILE * 3]))
+            .map(|_| Mutex::new(vec![0.0f32; TILE * TILE * 3]))
             .collect();
         Ok(Renderer {
             maps: ShadowMaps::new(params.shadow_map_size as usize),
@@ -196,6 +197,7 @@ impl Renderer {
             prims: Vec::new(),
             workers,
             tiles,
+            linear: Vec::new(),
             lut: shading::srgb_lut(),
             times: StageTimes::default(),
             strand_colors: Vec::new(),
@@ -253,7 +255,7 @@ impl Renderer {
         let t3 = Instant::now();
         self.tile_pass(&view, light, half);
         let t4 = Instant::now();
-        self.copy_out(out);
+        self.finish(out);
         let t5 = Instant::now();
 
         let (mut rn, mut sn) = (0u64, 0u64);
@@ -395,8 +397,6 @@ impl Renderer {
             ambient: p.ambient,
             kappa: p.kappa,
             light,
-            postfilter: p.postfilter,
-            lut: &self.lut,
         };
         let alpha = p.strand_alpha;
         let grid = self.grid;
@@ -436,7 +436,7 @@ impl Renderer {
                 }
                 let r1 = Instant::now();
                 let mut out = tiles[t].lock().unwrap_or_else(|e| e.into_inner());
-                resolve.tile(&w.buf, grid.ss, &mut w.pixels, &mut out);
+                resolve.tile(&w.buf, grid.ss, &mut out);
                 w.raster_ns += (r1 - r0).as_nanos() as u64;
                 w.resolve_ns += r1.elapsed().as_nanos() as u64;
             }
@@ -444,11 +444,11 @@ impl Renderer {
         self.pool.run(&job);
     }
 
-    fn copy_out(&mut self, out: &mut Image) {
+    /// Gathers the tiles' linear pixels into the frame, then postfilters and encodes it into
+    /// `out` in bands of rows, one job per band.
+    fn finish(&mut self, out: &mut Image) {
         let (w, h) = (self.width as usize, self.height as usize);
-        out.width = self.width;
-        out.height = self.height;
-        out.rgb.resize(w * h * 3, 0);
+        self.linear.resize(w * h * 3, 0.0);
         for (t, tile) in self.tiles.iter_mut().enumerate() {
             let tile = tile.get_mut().unwrap_or_else(|e| e.into_inner());
             let (tx, ty) = (
@@ -459,9 +459,31 @@ impl Renderer {
             for y in 0..TILE.min(h - ty) {
                 let src = &tile[y * TILE * 3..(y * TILE + cols) * 3];
                 let o = ((ty + y) * w + tx) * 3;
-                out.rgb[o..o + cols * 3].copy_from_slice(src);
+                self.linear[o..o + cols * 3].copy_from_slice(src);
             }
         }
+        out.width = self.width;
+        out.height = self.height;
+        out.rgb.resize(w * h * 3, 0);
+        let mut rest: &mut [u8] = &mut out.rgb;
+        let bands: [Mutex<(usize, usize, &mut [u8])>; CHUNKS] = std::array::from_fn(|c| {
+            let (y0, y1) = (c * h / CHUNKS, (c + 1) * h / CHUNKS);
+            let (mine, tail) = std::mem::take(&mut rest).split_at_mut((y1 - y0) * w * 3);
+            rest = tail;
+            Mutex::new((y0, y1, mine))
+        });
+        let next = AtomicUsize::new(0);
+        let (linear, lut, s) = (&self.linear, &self.lut, self.params.postfilter);
+        let job = |_k: usize| loop {
+            let c = next.fetch_add(1, Ordering::Relaxed);
+            if c >= CHUNKS {
+                break;
+            }
+            let mut g = bands[c].lock().unwrap_or_else(|e| e.into_inner());
+            let (y0, y1, ref mut band) = *g;
+            resolve::postfilter_rows(linear, w, h, y0..y1, s, lut, band);
+        };
+        self.pool.run(&job);
     }
 }
 

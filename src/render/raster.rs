@@ -5,10 +5,9 @@
 //! segments the AWT paper uses for antialiasing, Bertails et al. 2003, §5.1), each tile's own
 //! list with a stable radix sort, so the order is exact and the same on every run.
 
-/// Pixels per tile side (plus a one-pixel apron on each side for the postfilter).
+/// Pixels per tile side. Tiles have no apron: the postfilter runs over the whole frame once
+/// every tile is resolved, so no sample is drawn twice.
 pub(crate) const TILE: usize = 32;
-/// Apron, pixels.
-pub(crate) const APRON: usize = 1;
 /// Transmittance below which a sample counts as opaque (less than a 1/512 change in 8 bits).
 pub(crate) const OPAQUE: f32 = 1.0 / 512.0;
 
@@ -110,23 +109,22 @@ impl Grid {
     pub fn tiles(&self) -> usize {
         self.tiles_x * self.tiles_y
     }
-    /// Samples per side of a tile buffer, apron included.
+    /// Samples per side of a tile buffer.
     pub fn tile_samples(&self) -> usize {
-        (TILE + 2 * APRON) * self.ss
+        TILE * self.ss
     }
     /// Global sample coordinates of tile `t`'s buffer origin.
     pub fn origin(&self, t: usize) -> (i32, i32) {
         let (tx, ty) = (t % self.tiles_x, t / self.tiles_x);
         (
-            ((tx * TILE) as i32 - APRON as i32) * self.ss as i32,
-            ((ty * TILE) as i32 - APRON as i32) * self.ss as i32,
+            (tx * TILE * self.ss) as i32,
+            (ty * TILE * self.ss) as i32,
         )
     }
     /// Inclusive tile range [lo, hi] whose buffers overlap samples [a, b] along one axis.
     fn range(&self, a: f32, b: f32, n: usize) -> Option<(usize, usize)> {
         let span = (TILE * self.ss) as f32;
-        let apron = (APRON * self.ss) as f32;
-        let (lo, hi) = ((a - apron) / span, (b + apron) / span);
+        let (lo, hi) = (a / span, b / span);
         if hi < 0.0 || lo >= n as f32 || lo.is_nan() || hi.is_nan() {
             return None;
         }

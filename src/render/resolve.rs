@@ -5,7 +5,7 @@
 
 use super::body::Prim;
 use super::camera::{add, dot, scale, View};
-use super::raster::{APRON, OPAQUE, TILE};
+use super::raster::{OPAQUE, TILE};
 use super::shading::LUT_SIZE;
 use super::shadow::ShadowMaps;
 use super::tile::TileBuf;
@@ -23,8 +23,6 @@ pub(crate) struct Resolve<'a> {
     pub kappa: f32,
     /// Unit, towards the light.
     pub light: [f32; 3],
-    pub postfilter: f32,
-    pub lut: &'a [u8],
 }
 
 impl Resolve<'_> {
@@ -49,16 +47,13 @@ impl Resolve<'_> {
         scale(self.body, k)
     }
 
-    /// Resolves `buf` into `pixels` (linear scratch, (TILE + 2·APRON)² × 3) and writes the
-    /// tile's TILE² sRGB pixels to `out` (row-major, TILE × TILE × 3).
-    pub fn tile(&self, buf: &TileBuf, ss: usize, pixels: &mut Vec<f32>, out: &mut [u8]) {
-        let np = TILE + 2 * APRON;
-        pixels.clear();
-        pixels.resize(np * np * 3, 0.0);
+    /// Resolves `buf` into `out`, the tile's TILE² linear pixels (row-major, 3 floats each):
+    /// the body or background behind the hair, box-filtered over each pixel's samples.
+    pub fn tile(&self, buf: &TileBuf, ss: usize, out: &mut [f32]) {
         let n = buf.n;
         let norm = 1.0 / (ss * ss) as f32;
-        for py in 0..np {
-            for px in 0..np {
+        for py in 0..TILE {
+            for px in 0..TILE {
                 let mut acc = [0.0f32; 3];
                 // The body is shaded once per pixel and primitive (its first visible sample):
                 // its edges keep every sample's coverage, its shading varies slowly.
@@ -98,26 +93,41 @@ impl Resolve<'_> {
                         acc = [acc[0] + c[0], acc[1] + c[1], acc[2] + c[2]];
                     }
                 }
-                let o = (py * np + px) * 3;
-                pixels[o] = acc[0] * norm;
-                pixels[o + 1] = acc[1] * norm;
-                pixels[o + 2] = acc[2] * norm;
+                let o = (py * TILE + px) * 3;
+                out[o] = acc[0] * norm;
+                out[o + 1] = acc[1] * norm;
+                out[o + 2] = acc[2] * norm;
             }
         }
-        // Postfilter: (1 − s)·p + s·([1 2 1]ᵀ[1 2 1] / 16 ∗ p), on linear values.
-        let s = self.postfilter;
-        let lut_max = (LUT_SIZE - 1) as f32;
-        for y in 0..TILE {
-            for x in 0..TILE {
-                let (cy, cx) = (y + APRON, x + APRON);
-                for ch in 0..3 {
-                    let at = |yy: usize, xx: usize| pixels[(yy * np + xx) * 3 + ch];
-                    let row = |yy: usize| at(yy, cx - 1) + 2.0 * at(yy, cx) + at(yy, cx + 1);
-                    let blur = (row(cy - 1) + 2.0 * row(cy) + row(cy + 1)) * (1.0 / 16.0);
-                    let v = (1.0 - s) * at(cy, cx) + s * blur;
-                    let q = (v.clamp(0.0, 1.0) * lut_max + 0.5) as usize;
-                    out[(y * TILE + x) * 3 + ch] = self.lut[q];
-                }
+    }
+}
+
+/// The postfilter and sRGB encoding of rows `rows` of a `width`-pixel-wide frame of linear
+/// pixels `linear` (row-major, 3 floats each, `height` rows) into `out` (those rows' 8-bit
+/// pixels): (1 − s)·p + s·([1 2 1]ᵀ[1 2 1] / 16 ∗ p), on linear values, the frame's edge pixels
+/// repeated beyond it.
+pub(crate) fn postfilter_rows(
+    linear: &[f32],
+    width: usize,
+    height: usize,
+    rows: std::ops::Range<usize>,
+    s: f32,
+    lut: &[u8],
+    out: &mut [u8],
+) {
+    let lut_max = (LUT_SIZE - 1) as f32;
+    let first = rows.start;
+    for y in rows {
+        let (ym, yp) = (y.saturating_sub(1), (y + 1).min(height - 1));
+        for x in 0..width {
+            let (xm, xp) = (x.saturating_sub(1), (x + 1).min(width - 1));
+            for ch in 0..3 {
+                let at = |yy: usize, xx: usize| linear[(yy * width + xx) * 3 + ch];
+                let row = |yy: usize| at(yy, xm) + 2.0 * at(yy, x) + at(yy, xp);
+                let blur = (row(ym) + 2.0 * row(y) + row(yp)) * (1.0 / 16.0);
+                let v = (1.0 - s) * at(y, x) + s * blur;
+                let q = (v.clamp(0.0, 1.0) * lut_max + 0.5) as usize;
+                out[((y - first) * width + x) * 3 + ch] = lut[q];
             }
         }
     }
