@@ -116,10 +116,7 @@ impl Grid {
     /// Global sample coordinates of tile `t`'s buffer origin.
     pub fn origin(&self, t: usize) -> (i32, i32) {
         let (tx, ty) = (t % self.tiles_x, t / self.tiles_x);
-        (
-            (tx * TILE * self.ss) as i32,
-            (ty * TILE * self.ss) as i32,
-        )
+        ((tx * TILE * self.ss) as i32, (ty * TILE * self.ss) as i32)
     }
     /// Inclusive tile range [lo, hi] whose buffers overlap samples [a, b] along one axis.
     fn range(&self, a: f32, b: f32, n: usize) -> Option<(usize, usize)> {
