@@ -217,12 +217,13 @@ fn the_page_moves_the_simulation_refuses_bad_values_and_keeps_tabs_in_agreement(
     });
 
     // An out-of-range value typed in is refused on the page; the simulation keeps its value.
+    // Ctrl+A, then "5" and Enter, in one focused key sequence (an Element Clear would unfocus
+    // the field, and a state poll landing before the typing could refill it).
     let n = d.element("#n-split_threshold");
-    d.call("POST", &format!("/element/{n}/clear"), Some(json!({})));
     d.call(
         "POST",
         &format!("/element/{n}/value"),
-        Some(json!({"text": "5\u{E007}"})),
+        Some(json!({"text": "\u{E009}a\u{E000}5\u{E007}"})),
     );
     let status = d.wait_text("#status", "the refusal shows", |t| t.contains("refused"));
     assert!(status.contains("between 0.05 and 1"), "{status}");
