@@ -110,7 +110,7 @@ pub fn default_threads() -> usize {
     std::thread::available_parallelism().map_or(1, |n| n.get().min(64))
 }
 
-/// Strand chunks of the shading stage (work items for the threads).
+/// Work items of the shading stage (strand chunks) and of the postfilter (bands of rows).
 const CHUNKS: usize = 16;
 
 struct Worker {
@@ -311,13 +311,8 @@ impl Renderer {
                 taken = end;
                 Mutex::new((s0, s1, mine))
             });
-        let next = AtomicUsize::new(0);
         let (maps, colors) = (&self.maps, &self.strand_colors);
-        let job = |_k: usize| loop {
-            let c = next.fetch_add(1, Ordering::Relaxed);
-            if c >= CHUNKS {
-                break;
-            }
+        let job = |c: usize| {
             let mut g = parts[c].lock().unwrap_or_else(|e| e.into_inner());
             let (s0, s1, ref mut out) = *g;
             let base = if ns == 0 {
@@ -350,7 +345,7 @@ impl Renderer {
                 }
             }
         };
-        self.pool.run(&job);
+        self.pool.for_each(CHUNKS, &job);
     }
 
     /// Bins the segments into tiles: the two halves of the strands counted, then filled, by
@@ -358,31 +353,21 @@ impl Renderer {
     fn bin(&mut self, offsets: &[u32], reach: f32) {
         let ns = offsets.len().saturating_sub(1);
         let (verts, grid, halves) = (&self.verts, &self.grid, &self.bins.halves);
-        let next = AtomicUsize::new(0);
-        let count = |_k: usize| loop {
-            let h = next.fetch_add(1, Ordering::Relaxed);
-            if h >= 2 {
-                break;
-            }
+        let count = |h: usize| {
             let mut b = halves[h].lock().unwrap_or_else(|e| e.into_inner());
             b.count(verts, offsets, h * ns / 2..(h + 1) * ns / 2, grid, reach);
         };
-        self.pool.run(&count);
+        self.pool.for_each(2, &count);
         let (mut zlo, mut zhi) = (f32::INFINITY, f32::NEG_INFINITY);
         for h in halves {
             let (a, b) = h.lock().unwrap_or_else(|e| e.into_inner()).depth_range();
             (zlo, zhi) = (zlo.min(a), zhi.max(b));
         }
-        let next = AtomicUsize::new(0);
-        let fill = |_k: usize| loop {
-            let h = next.fetch_add(1, Ordering::Relaxed);
-            if h >= 2 {
-                break;
-            }
+        let fill = |h: usize| {
             let mut b = halves[h].lock().unwrap_or_else(|e| e.into_inner());
             b.fill(verts, grid, zlo, zhi);
         };
-        self.pool.run(&fill);
+        self.pool.for_each(2, &fill);
     }
 
     fn tile_pass(&mut self, view: &View, light: [f32; 3], half: f32) {
@@ -472,18 +457,13 @@ impl Renderer {
             rest = tail;
             Mutex::new((y0, y1, mine))
         });
-        let next = AtomicUsize::new(0);
         let (linear, lut, s) = (&self.linear, &self.lut, self.params.postfilter);
-        let job = |_k: usize| loop {
-            let c = next.fetch_add(1, Ordering::Relaxed);
-            if c >= CHUNKS {
-                break;
-            }
+        let job = |c: usize| {
             let mut g = bands[c].lock().unwrap_or_else(|e| e.into_inner());
             let (y0, y1, ref mut band) = *g;
             resolve::postfilter_rows(linear, w, h, y0..y1, s, lut, band);
         };
-        self.pool.run(&job);
+        self.pool.for_each(CHUNKS, &job);
     }
 }
 

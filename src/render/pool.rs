@@ -2,6 +2,7 @@
 //! that rendering a frame spawns nothing and allocates nothing.
 
 use std::panic::{catch_unwind, AssertUnwindSafe};
+use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::{Arc, Condvar, Mutex, MutexGuard};
 use std::thread::JoinHandle;
 
@@ -99,6 +100,20 @@ impl Pool {
             std::panic::resume_unwind(e);
         }
         assert!(!theirs, "a render worker thread panicked");
+    }
+
+    /// Runs `f(i)` for every item `i` in `0..n`, each worker taking the next item not yet
+    /// taken, and returns when all are done. Which worker does an item varies from run to run,
+    /// so `f` must not depend on it.
+    pub fn for_each(&self, n: usize, f: &(dyn Fn(usize) + Sync)) {
+        let next = AtomicUsize::new(0);
+        self.run(&|_k| loop {
+            let i = next.fetch_add(1, Ordering::Relaxed);
+            if i >= n {
+                break;
+            }
+            f(i);
+        });
     }
 }
 

@@ -98,13 +98,8 @@ impl ShadowMaps {
     ) {
         self.frame(points, to_light);
         let ns = offsets.len().saturating_sub(1);
-        let next = std::sync::atomic::AtomicUsize::new(0);
         let me = &*self;
-        let job = |_k: usize| loop {
-            let h = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-            if h >= HALVES {
-                break;
-            }
+        let job = |h: usize| {
             let mut m = me.partial[h].lock().unwrap_or_else(|e| e.into_inner());
             m.clear();
             m.resize(me.size * me.size * MAPS, 0.0);
@@ -116,8 +111,8 @@ impl ShadowMaps {
             }
         };
         match pool {
-            Some(p) => p.run(&job),
-            None => job(0),
+            Some(p) => p.for_each(HALVES, &job),
+            None => (0..HALVES).for_each(job),
         }
         let [p0, p1] = &mut self.partial;
         let (p0, p1) = (
