@@ -20,6 +20,7 @@
 
 pub mod body;
 pub mod camera;
+mod lazy_shade;
 mod pool;
 pub mod raster;
 pub mod resolve;
@@ -29,7 +30,7 @@ pub mod shadow;
 mod tile;
 
 use std::path::Path;
-use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
 use std::sync::Mutex;
 use std::time::{Duration, Instant};
 
@@ -40,7 +41,7 @@ pub use shading::{kajiya_kay_diffuse, kajiya_kay_specular};
 pub use shadow::{eq1_opacity, ShadowMaps, MAPS};
 
 use crate::frame::{BodyBuf, StrandBuf};
-use camera::{normalize, sub, View};
+use camera::{normalize, View};
 use raster::{Bins, Grid, ScreenVertex, TILE};
 use shading::{srgb3_to_linear, HairShader};
 use tile::TileBuf;
@@ -130,6 +131,8 @@ pub struct Renderer {
     pool: pool::Pool,
     maps: ShadowMaps,
     verts: Vec<ScreenVertex>,
+    /// Per strand point, its shading state or colour ([`lazy_shade`]).
+    shade_words: Vec<AtomicU64>,
     bins: Bins,
     prims: Vec<body::Prim>,
     workers: Vec<Mutex<Worker>>,
@@ -137,6 +140,8 @@ pub struct Renderer {
     tiles: Vec<Mutex<Vec<f32>>>,
     /// The whole frame's linear pixels, gathered from the tiles for the postfilter.
     linear: Vec<f32>,
+    /// Per postfilter band, its row of vertical sums.
+    band_scratch: [Mutex<Vec<f32>>; CHUNKS],
     lut: Vec<u8>,
     times: StageTimes,
     /// Per-strand linear colours; empty: every strand has `params.hair_color`.
@@ -193,11 +198,13 @@ impl Renderer {
             grid,
             pool,
             verts: Vec::new(),
+            shade_words: Vec::new(),
             bins: Bins::default(),
             prims: Vec::new(),
             workers,
             tiles,
             linear: Vec::new(),
+            band_scratch: Default::default(),
             lut: shading::srgb_lut(),
             times: StageTimes::default(),
             strand_colors: Vec::new(),
@@ -241,7 +248,7 @@ impl Renderer {
         self.maps
             .build_with(&strands.points, &strands.offsets, light, Some(&self.pool));
         let t1 = Instant::now();
-        self.shade(strands, &view, light);
+        self.project(strands, &view);
         let t2 = Instant::now();
 
         let half = 0.5 * strand_width * ss as f32;
@@ -253,7 +260,7 @@ impl Renderer {
         );
         body::prims(input.body, &view, ws, hs, &mut self.prims);
         let t3 = Instant::now();
-        self.tile_pass(&view, light, half);
+        self.tile_pass(&view, light, half, &strands.points);
         let t4 = Instant::now();
         self.finish(out);
         let t5 = Instant::now();
@@ -278,70 +285,52 @@ impl Renderer {
         };
     }
 
-    /// Shades and projects every strand point (Kajiya-Kay under the maps' transmittance).
-    fn shade(&mut self, strands: &StrandBuf, view: &View, light: [f32; 3]) {
-        let p = &self.params;
-        let shader = HairShader {
-            color: srgb3_to_linear(p.hair_color),
-            diffuse: p.diffuse,
-            specular: p.specular,
-            exponent: p.specular_exponent,
-            ambient: p.ambient,
-            light,
-        };
-        let kappa = p.kappa;
-        self.verts.clear();
-        self.verts
-            .resize(strands.points.len(), ScreenVertex::default());
+    /// Projects every strand point, and marks it unshaded with its strand and ends (the
+    /// shading itself waits for the tile pass, [`lazy_shade`]).
+    fn project(&mut self, strands: &StrandBuf, view: &View) {
+        let n = strands.points.len();
+        // Every vertex and word is written below: resized, not cleared.
+        self.verts.resize(n, ScreenVertex::default());
+        self.shade_words.resize_with(n, || AtomicU64::new(0));
         let ns = strands.len();
-        // Split the vertices at strand boundaries into CHUNKS slices, one lock each.
-        let mut rest: &mut [ScreenVertex] = &mut self.verts;
+        // Split the points at strand boundaries into CHUNKS slices, one lock each.
+        let (mut rest_v, mut rest_w): (&mut [ScreenVertex], &mut [AtomicU64]) =
+            (&mut self.verts, &mut self.shade_words);
         let mut taken = 0usize;
-        let parts: [Mutex<(usize, usize, &mut [ScreenVertex])>; CHUNKS] =
-            std::array::from_fn(|c| {
-                let s0 = c * ns / CHUNKS;
-                let s1 = (c + 1) * ns / CHUNKS;
-                let end = if ns == 0 {
-                    0
-                } else {
-                    strands.offsets[s1] as usize
-                };
-                let (mine, tail) = std::mem::take(&mut rest).split_at_mut(end - taken);
-                rest = tail;
-                taken = end;
-                Mutex::new((s0, s1, mine))
-            });
-        let (maps, colors) = (&self.maps, &self.strand_colors);
+        type Part<'a> = (usize, usize, &'a mut [ScreenVertex], &'a mut [AtomicU64]);
+        let parts: [Mutex<Part>; CHUNKS] = std::array::from_fn(|c| {
+            let s0 = c * ns / CHUNKS;
+            let s1 = (c + 1) * ns / CHUNKS;
+            let end = if ns == 0 {
+                0
+            } else {
+                strands.offsets[s1] as usize
+            };
+            let (mine_v, tail_v) = std::mem::take(&mut rest_v).split_at_mut(end - taken);
+            let (mine_w, tail_w) = std::mem::take(&mut rest_w).split_at_mut(end - taken);
+            (rest_v, rest_w) = (tail_v, tail_w);
+            taken = end;
+            Mutex::new((s0, s1, mine_v, mine_w))
+        });
         let job = |c: usize| {
             let mut g = parts[c].lock().unwrap_or_else(|e| e.into_inner());
-            let (s0, s1, ref mut out) = *g;
+            let (s0, s1, ref mut out, ref mut words) = *g;
             let base = if ns == 0 {
                 0
             } else {
                 strands.offsets[s0] as usize
             };
             for s in s0..s1 {
-                let mut shader = shader;
-                if let Some(c) = colors.get(s) {
-                    shader.color = *c;
-                }
                 let (a, b) = (strands.offsets[s] as usize, strands.offsets[s + 1] as usize);
-                let pts = &strands.points[a..b];
-                for (j, &pt) in pts.iter().enumerate() {
-                    let prev = pts[j.saturating_sub(1)];
-                    let next = pts[(j + 1).min(pts.len() - 1)];
-                    let t = normalize(sub(next, prev));
-                    let e = normalize(sub(view.eye, pt));
-                    let q = maps.point(a + j);
-                    let trans = (-kappa * maps.opacity(q, 1.0)).exp();
-                    let c = shader.shade(t, e, trans);
+                for (k, &pt) in strands.points[a..b].iter().enumerate() {
                     let sp = view.project(pt);
-                    out[a + j - base] = ScreenVertex {
+                    out[a + k - base] = ScreenVertex {
                         x: sp[0],
                         y: sp[1],
                         z: sp[2],
-                        c,
                     };
+                    *words[a + k - base].get_mut() =
+                        lazy_shade::unshaded(s, k == 0, a + k + 1 == b);
                 }
             }
         };
@@ -370,8 +359,25 @@ impl Renderer {
         self.pool.for_each(2, &fill);
     }
 
-    fn tile_pass(&mut self, view: &View, light: [f32; 3], half: f32) {
+    fn tile_pass(&mut self, view: &View, light: [f32; 3], half: f32, points: &[[f32; 3]]) {
         let p = &self.params;
+        let shade = lazy_shade::LazyShade {
+            points,
+            maps: &self.maps,
+            view,
+            shader: HairShader {
+                color: srgb3_to_linear(p.hair_color),
+                diffuse: p.diffuse,
+                specular: p.specular,
+                exponent: p.specular_exponent,
+                ambient: p.ambient,
+                light,
+            },
+            strand_colors: &self.strand_colors,
+            kappa: p.kappa,
+            words: &self.shade_words,
+        };
+        let color = |v: usize| shade.color(v);
         let resolve = resolve::Resolve {
             view,
             prims: &self.prims,
@@ -407,14 +413,14 @@ impl Renderer {
                 w.buf.reset(n, ox, oy);
                 w.buf.cast_body(view, prims);
                 w.buf.close_blocks();
-                raster::sort_tile(
+                let n_segs = raster::sort_tile(
                     halves[0].tile(t),
                     halves[1].tile(t),
                     &mut w.sorted,
                     &mut w.tmp,
                 );
-                for s in &w.sorted {
-                    w.buf.segment(&s.a, &s.b, half, alpha);
+                for s in &w.sorted[..n_segs] {
+                    w.buf.segment(s, half, alpha, &color);
                     if w.buf.alive == 0 {
                         break;
                     }
@@ -458,10 +464,12 @@ impl Renderer {
             Mutex::new((y0, y1, mine))
         });
         let (linear, lut, s) = (&self.linear, &self.lut, self.params.postfilter);
+        let scratch = &self.band_scratch;
         let job = |c: usize| {
             let mut g = bands[c].lock().unwrap_or_else(|e| e.into_inner());
             let (y0, y1, ref mut band) = *g;
-            resolve::postfilter_rows(linear, w, h, y0..y1, s, lut, band);
+            let mut row = scratch[c].lock().unwrap_or_else(|e| e.into_inner());
+            resolve::postfilter_rows(linear, w, h, y0..y1, s, lut, band, &mut row);
         };
         self.pool.for_each(CHUNKS, &job);
     }

@@ -11,21 +11,24 @@ pub(crate) const TILE: usize = 32;
 /// Transmittance below which a sample counts as opaque (less than a 1/512 change in 8 bits).
 pub(crate) const OPAQUE: f32 = 1.0 / 512.0;
 
-/// A strand point on screen: sample coordinates, view depth, and its shaded linear colour.
+/// A strand point on screen: sample coordinates and view depth.
 #[derive(Debug, Clone, Copy, Default)]
 pub(crate) struct ScreenVertex {
     pub x: f32,
     pub y: f32,
     pub z: f32,
-    pub c: [f32; 3],
 }
 
 /// A segment as binned: its two end points, copied so that a tile reads its segments from
-/// one contiguous run of memory.
+/// one contiguous run of memory, and the index of its first point (its colours are shaded
+/// only if it is drawn, [`super::lazy_shade`]). 32 bytes, so that filling and sorting the
+/// tiles move little.
 #[derive(Debug, Clone, Copy, Default)]
 pub(crate) struct SegRec {
     pub a: ScreenVertex,
     pub b: ScreenVertex,
+    /// Index of point `a` among the frame's strand points (`b` is the next one).
+    pub first: u32,
     /// Midpoint view depth, quantised to 16 bits over the frame's depth range.
     pub key: u32,
 }
@@ -197,7 +200,12 @@ impl HalfBins {
             for ty in y0 as usize..=y1 as usize {
                 for tx in x0 as usize..=x1 as usize {
                     let c = &mut self.cursor[ty * grid.tiles_x + tx];
-                    self.items[*c as usize] = SegRec { a, b, key };
+                    self.items[*c as usize] = SegRec {
+                        a,
+                        b,
+                        first: i,
+                        key,
+                    };
                     *c += 1;
                 }
             }
@@ -215,7 +223,7 @@ impl HalfBins {
     }
 }
 
-/// Sorts a tile's segments front to back into `out` (by increasing key, equal keys in strand
+/// Sorts a tile's segments front to back into `out[..n]`, `n` their number (by increasing key, equal keys in strand
 /// order: two stable 8-bit counting passes, so the order is the same on every run). The
 /// records themselves move, so that the rasteriser then reads them in order from memory.
 pub(crate) fn sort_tile(
@@ -223,10 +231,16 @@ pub(crate) fn sort_tile(
     second: &[SegRec],
     out: &mut Vec<SegRec>,
     tmp: &mut Vec<SegRec>,
-) {
+) -> usize {
     let n = first.len() + second.len();
-    out.resize(n, SegRec::default());
-    tmp.resize(n, SegRec::default());
+    // Grown, never shrunk: every record up to `n` is written below, so the buffers are only
+    // filled with defaults when a tile needs more room than any before it.
+    for v in [&mut *out, &mut *tmp] {
+        if v.len() < n {
+            v.resize(n, SegRec::default());
+        }
+    }
+    let (out, tmp) = (&mut out[..n], &mut tmp[..n]);
     let pass = |a: &[SegRec], b: &[SegRec], dst: &mut [SegRec], shift: u32| {
         let mut counts = [0u32; 257];
         for r in a.iter().chain(b) {
@@ -243,4 +257,5 @@ pub(crate) fn sort_tile(
     };
     pass(first, second, tmp, 0);
     pass(tmp, &[], out, 8);
+    n
 }

@@ -106,6 +106,10 @@ impl Resolve<'_> {
 /// pixels `linear` (row-major, 3 floats each, `height` rows) into `out` (those rows' 8-bit
 /// pixels): (1 − s)·p + s·([1 2 1]ᵀ[1 2 1] / 16 ∗ p), on linear values, the frame's edge pixels
 /// repeated beyond it.
+///
+/// The kernel is separable: each output row is the vertical [1 2 1] sum of three input rows
+/// (one pass over contiguous floats, which the compiler vectorises), then the horizontal
+/// [1 2 1] sum of that, three floats (one pixel) apart. `scratch` holds the vertical sum.
 pub(crate) fn postfilter_rows(
     linear: &[f32],
     width: usize,
@@ -114,21 +118,34 @@ pub(crate) fn postfilter_rows(
     s: f32,
     lut: &[u8],
     out: &mut [u8],
+    scratch: &mut Vec<f32>,
 ) {
     let lut_max = (LUT_SIZE - 1) as f32;
+    let stride = width * 3;
+    let (keep, k) = (1.0 - s, s * (1.0 / 16.0));
     let first = rows.start;
+    scratch.resize(stride + 6, 0.0);
     for y in rows {
         let (ym, yp) = (y.saturating_sub(1), (y + 1).min(height - 1));
-        for x in 0..width {
-            let (xm, xp) = (x.saturating_sub(1), (x + 1).min(width - 1));
-            for ch in 0..3 {
-                let at = |yy: usize, xx: usize| linear[(yy * width + xx) * 3 + ch];
-                let row = |yy: usize| at(yy, xm) + 2.0 * at(yy, x) + at(yy, xp);
-                let blur = (row(ym) + 2.0 * row(y) + row(yp)) * (1.0 / 16.0);
-                let v = (1.0 - s) * at(y, x) + s * blur;
-                let q = (v.clamp(0.0, 1.0) * lut_max + 0.5) as usize;
-                out[((y - first) * width + x) * 3 + ch] = lut[q];
-            }
+        let (above, here, below) = (
+            &linear[ym * stride..(ym + 1) * stride],
+            &linear[y * stride..(y + 1) * stride],
+            &linear[yp * stride..(yp + 1) * stride],
+        );
+        // Vertical sums, with the edge pixel repeated one pixel beyond each end.
+        let v = &mut scratch[..stride + 6];
+        for (((o, a), b), c) in v[3..stride + 3].iter_mut().zip(above).zip(here).zip(below) {
+            *o = a + 2.0 * b + c;
+        }
+        for ch in 0..3 {
+            v[ch] = v[3 + ch];
+            v[stride + 3 + ch] = v[stride + ch];
+        }
+        let dst = &mut out[(y - first) * stride..(y - first + 1) * stride];
+        for (i, (o, p)) in dst.iter_mut().zip(here).enumerate() {
+            let blur = v[i] + 2.0 * v[i + 3] + v[i + 6];
+            let x = keep * p + k * blur;
+            *o = lut[(x.clamp(0.0, 1.0) * lut_max + 0.5) as usize];
         }
     }
 }

@@ -22,7 +22,7 @@
 //! samples outside its cross-section get coverage 0 and so add exactly nothing.
 
 use super::camera::View;
-use super::raster::{ceil_pos, floor_pos, ScreenVertex, OPAQUE};
+use super::raster::{ceil_pos, floor_pos, SegRec, OPAQUE};
 
 /// Side of a culling block, samples (a power of two).
 const BLOCK: usize = 4;
@@ -94,7 +94,7 @@ impl TileBuf {
         self.px.resize(m, Px([0.0, 0.0, 0.0, 1.0]));
         self.zb.clear();
         self.zb.resize(m, f32::INFINITY);
-        self.prim.clear();
+        // `prim` is read only where `zb` is finite, and written wherever it is set: no clear.
         self.prim.resize(m, 0);
         self.alive = m;
         self.nb = n.div_ceil(BLOCK);
@@ -245,32 +245,35 @@ impl TileBuf {
         }
     }
 
-    /// Blends segment a–b (global sample coordinates) behind what the tile holds: a line of
-    /// half-width `half` samples and opacity `alpha` where it covers a whole sample.
+    /// Blends segment `s` (global sample coordinates) behind what the tile holds: a line of
+    /// half-width `half` samples and opacity `alpha` where it covers a whole sample, coloured
+    /// by `color` of its two points (asked only if some of it may show).
     #[inline]
-    pub fn segment(&mut self, a: &ScreenVertex, b: &ScreenVertex, half: f32, alpha: f32) {
+    pub fn segment(
+        &mut self,
+        s: &SegRec,
+        half: f32,
+        alpha: f32,
+        color: &impl Fn(usize) -> [f32; 3],
+    ) {
+        let (a, b) = (&s.a, &s.b);
         let (ox, oy) = (self.ox as f32, self.oy as f32);
         let (ax, ay, bx, by) = (a.x - ox, a.y - oy, b.x - ox, b.y - oy);
         let n = self.n;
         // Major axis: the one along which the segment is longer; one sample step per column.
         let x_major = (bx - ax).abs() >= (by - ay).abs();
-        let (mut p, mut q) = if x_major {
-            ((ax, ay, a), (bx, by, b))
+        let (maj_a, min_a, maj_b, min_b) = if x_major {
+            (ax, ay, bx, by)
         } else {
-            ((ay, ax, a), (by, bx, b))
+            (ay, ax, by, bx)
         };
-        if q.0 < p.0 {
-            std::mem::swap(&mut p, &mut q);
-        }
-        let (maj0, min0, va) = p;
-        let (maj1, min1, vb) = q;
-        let d = maj1 - maj0;
+        let d = (maj_b - maj_a).abs();
         if d < 1e-6 {
             return;
         }
         let r = half * 1.5 + 1.0;
         let (zmin, lo0, hi0, lo1, hi1) = (
-            mn(va.z, vb.z),
+            mn(a.z, b.z),
             mn(ax, bx) - r,
             mx(ax, bx) + r,
             mn(ay, by) - r,
@@ -279,6 +282,14 @@ impl TileBuf {
         if hi0 < 0.0 || hi1 < 0.0 || self.hidden(lo0, hi0, lo1, hi1, zmin) {
             return;
         }
+        let i = s.first as usize;
+        let (ca, cb) = (color(i), color(i + 1));
+        // Walk the major axis upwards.
+        let (maj0, min0, z0, c0, maj1, min1, z1, c1) = if maj_b < maj_a {
+            (maj_b, min_b, b.z, cb, maj_a, min_a, a.z, ca)
+        } else {
+            (maj_a, min_a, a.z, ca, maj_b, min_b, b.z, cb)
+        };
         let inv = 1.0 / d;
         let slope = (min1 - min0) * inv;
         // The line's cross-section along the minor axis widens as 1/cos of its angle.
@@ -288,8 +299,8 @@ impl TileBuf {
         let (stride_maj, stride_min) = if x_major { (1, n) } else { (n, 1) };
         let i0 = floor_pos(maj0);
         let i1 = ceil_pos(maj1).min(n);
-        let dz = vb.z - va.z;
-        let dc = [vb.c[0] - va.c[0], vb.c[1] - va.c[1], vb.c[2] - va.c[2]];
+        let dz = z1 - z0;
+        let dc = [c1[0] - c0[0], c1[1] - c0[1], c1[2] - c0[2]];
         let mut fi = i0 as f32;
         for i in i0..i1 {
             let lo = mx(maj0, fi);
@@ -301,7 +312,7 @@ impl TileBuf {
             }
             let t = (0.5 * (lo + hi) - maj0) * inv;
             let c = min0 + t * (min1 - min0);
-            let z = va.z + t * dz;
+            let z = z0 + t * dz;
             let (y_lo, y_hi) = (c - h, c + h);
             let j0 = floor_pos(y_lo);
             let j1 = ceil_pos(y_hi).min(n);
@@ -310,9 +321,9 @@ impl TileBuf {
                 continue;
             }
             let rgb = Px([
-                va.c[0] + t * dc[0],
-                va.c[1] + t * dc[1],
-                va.c[2] + t * dc[2],
+                c0[0] + t * dc[0],
+                c0[1] + t * dc[1],
+                c0[2] + t * dc[2],
                 -1.0,
             ]);
             let w0 = alpha * cov_maj;
