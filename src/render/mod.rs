@@ -4,9 +4,11 @@
 //! A frame goes through four stages:
 //!
 //! 1. **Shadow maps** ([`shadow`]): 16 opacity maps perpendicular to the light.
-//! 2. **Shading**: every strand point is shaded with Kajiya-Kay ([`shading`]) under the light
-//!    transmittance of the maps, and projected (Zhang and Wünsche shade per vertex and let the
-//!    rasteriser interpolate colours, §6.1).
+//! 2. **Projection**: every strand point is projected to the screen. Its Kajiya-Kay colour
+//!    under the maps' transmittance ([`shading`]) is computed on demand, the first time a
+//!    segment at it is drawn ([`lazy_shade`]); Zhang and Wünsche shade per vertex and let the
+//!    rasteriser interpolate colours (§6.1), and so does this renderer, for the vertices that
+//!    show.
 //! 3. **Rasterising** ([`raster`]): segments sorted by depth once, binned into 32×32-pixel
 //!    tiles; each tile ray casts the body ([`body`]) then blends its segments front to back on
 //!    a supersampled grid.
@@ -81,7 +83,8 @@ impl Image {
 pub struct StageTimes {
     /// Building the 16 opacity shadow maps.
     pub shadow_maps: Duration,
-    /// Shading and projecting every strand point.
+    /// Projecting every strand point (the shading itself is done on demand in the tile pass,
+    /// and counted under `rasterising`).
     pub shading: Duration,
     /// Sorting and binning segments, then the tile pass's body casting and blending.
     pub rasterising: Duration,
@@ -440,19 +443,40 @@ impl Renderer {
     fn finish(&mut self, out: &mut Image) {
         let (w, h) = (self.width as usize, self.height as usize);
         self.linear.resize(w * h * 3, 0.0);
-        for (t, tile) in self.tiles.iter_mut().enumerate() {
-            let tile = tile.get_mut().unwrap_or_else(|e| e.into_inner());
-            let (tx, ty) = (
-                (t % self.grid.tiles_x) * TILE,
-                (t / self.grid.tiles_x) * TILE,
-            );
-            let cols = TILE.min(w - tx);
-            for y in 0..TILE.min(h - ty) {
-                let src = &tile[y * TILE * 3..(y * TILE + cols) * 3];
-                let o = ((ty + y) * w + tx) * 3;
-                self.linear[o..o + cols * 3].copy_from_slice(src);
+        // The gather, in bands of whole rows of tiles, one job each.
+        let (grid, tiles) = (self.grid, &self.tiles);
+        let mut rest: &mut [f32] = &mut self.linear;
+        let mut taken = 0;
+        let rows: [Mutex<(usize, usize, &mut [f32])>; CHUNKS] = std::array::from_fn(|c| {
+            let (t0, t1) = (c * grid.tiles_y / CHUNKS, (c + 1) * grid.tiles_y / CHUNKS);
+            let end = (t1 * TILE).min(h);
+            let (mine, tail) = std::mem::take(&mut rest).split_at_mut((end - taken) * w * 3);
+            rest = tail;
+            taken = end;
+            Mutex::new((t0, t1, mine))
+        });
+        let gather = |c: usize| {
+            let mut g = rows[c].lock().unwrap_or_else(|e| e.into_inner());
+            let (t0, t1, ref mut dst) = *g;
+            for ty in t0..t1 {
+                let y0 = (ty - t0) * TILE;
+                let ny = TILE.min(h - ty * TILE);
+                for tx in 0..grid.tiles_x {
+                    let tile = tiles[ty * grid.tiles_x + tx]
+                        .lock()
+                        .unwrap_or_else(|e| e.into_inner());
+                    let x0 = tx * TILE;
+                    let cols = TILE.min(w - x0);
+                    for y in 0..ny {
+                        let src = &tile[y * TILE * 3..(y * TILE + cols) * 3];
+                        let o = ((y0 + y) * w + x0) * 3;
+                        dst[o..o + cols * 3].copy_from_slice(src);
+                    }
+                }
             }
-        }
+        };
+        self.pool.for_each(CHUNKS, &gather);
+        drop(rows);
         out.width = self.width;
         out.height = self.height;
         out.rgb.resize(w * h * 3, 0);

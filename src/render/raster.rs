@@ -58,6 +58,26 @@ pub(crate) struct HalfBins {
     pub items: Vec<SegRec>,
 }
 
+/// min(a, b) for numbers (one `minss`; `f32::min` adds NaN fix-ups on x86).
+#[inline(always)]
+fn mn(a: f32, b: f32) -> f32 {
+    if a < b {
+        a
+    } else {
+        b
+    }
+}
+
+/// max(a, b) for numbers (one `maxss`).
+#[inline(always)]
+fn mx(a: f32, b: f32) -> f32 {
+    if a > b {
+        a
+    } else {
+        b
+    }
+}
+
 /// Largest argument [`floor_pos`] and [`ceil_pos`] tell apart (far beyond any image).
 const POS_MAX: f32 = 16_777_216.0;
 
@@ -121,15 +141,6 @@ impl Grid {
         let (tx, ty) = (t % self.tiles_x, t / self.tiles_x);
         ((tx * TILE * self.ss) as i32, (ty * TILE * self.ss) as i32)
     }
-    /// Inclusive tile range [lo, hi] whose buffers overlap samples [a, b] along one axis.
-    fn range(&self, a: f32, b: f32, n: usize) -> Option<(usize, usize)> {
-        let span = (TILE * self.ss) as f32;
-        let (lo, hi) = (a / span, b / span);
-        if hi < 0.0 || lo >= n as f32 || lo.is_nan() || hi.is_nan() {
-            return None;
-        }
-        Some((floor_pos(lo), floor_pos(hi).min(n - 1)))
-    }
 }
 
 impl HalfBins {
@@ -150,26 +161,35 @@ impl HalfBins {
         self.start.clear();
         self.start.resize(nt + 1, 0);
         let (mut zlo, mut zhi) = (f32::INFINITY, f32::NEG_INFINITY);
+        // Tile coordinates are sample coordinates times `inv_span`; a box entirely left of or
+        // above the image, or beyond it, or with a NaN, touches no tile.
+        let inv_span = 1.0 / (TILE * grid.ss) as f32;
+        let (ntx, nty) = (grid.tiles_x as f32, grid.tiles_y as f32);
+        let (lastx, lasty) = (grid.tiles_x - 1, grid.tiles_y - 1);
         for s in strands {
             let (a, b) = (offsets[s] as usize, offsets[s + 1] as usize);
             for i in a..b.saturating_sub(1) {
                 let (p, q) = (&verts[i], &verts[i + 1]);
-                if p.z <= super::camera::NEAR || q.z <= super::camera::NEAR {
+                if !(p.z > super::camera::NEAR && q.z > super::camera::NEAR) {
                     continue;
                 }
-                let xs = grid.range(p.x.min(q.x) - reach, p.x.max(q.x) + reach, grid.tiles_x);
-                let ys = grid.range(p.y.min(q.y) - reach, p.y.max(q.y) + reach, grid.tiles_y);
-                let (Some((x0, x1)), Some((y0, y1))) = (xs, ys) else {
+                let x0 = (mn(p.x, q.x) - reach) * inv_span;
+                let x1 = (mx(p.x, q.x) + reach) * inv_span;
+                let y0 = (mn(p.y, q.y) - reach) * inv_span;
+                let y1 = (mx(p.y, q.y) + reach) * inv_span;
+                if !(x1 >= 0.0 && x0 < ntx && y1 >= 0.0 && y0 < nty) {
                     continue;
-                };
+                }
+                let (x0, x1) = (floor_pos(x0), floor_pos(x1).min(lastx));
+                let (y0, y1) = (floor_pos(y0), floor_pos(y1).min(lasty));
                 for ty in y0..=y1 {
                     for tx in x0..=x1 {
                         self.start[ty * grid.tiles_x + tx + 1] += 1;
                     }
                 }
                 let z = 0.5 * (p.z + q.z);
-                zlo = zlo.min(z);
-                zhi = zhi.max(z);
+                zlo = mn(zlo, z);
+                zhi = mx(zhi, z);
                 self.firsts.push(i as u32);
                 self.rects
                     .push([x0 as u16, x1 as u16, y0 as u16, y1 as u16]);

@@ -145,7 +145,13 @@ pub(crate) fn postfilter_rows(
         for (i, (o, p)) in dst.iter_mut().zip(here).enumerate() {
             let blur = v[i] + 2.0 * v[i + 3] + v[i + 6];
             let x = keep * p + k * blur;
-            *o = lut[(x.clamp(0.0, 1.0) * lut_max + 0.5) as usize];
+            // Clamped to [0, 1] with NaN to 0 (comparisons, no `f32::clamp` NaN path), so the
+            // index is in range and the unchecked conversion exact.
+            let x = if x > 0.0 { x } else { 0.0 };
+            let x = if x < 1.0 { x } else { 1.0 };
+            // SAFETY: x · lut_max + 0.5 is finite and in [0.5, LUT_SIZE − 0.5].
+            let q = unsafe { (x * lut_max + 0.5).to_int_unchecked::<u32>() };
+            *o = lut[q as usize];
         }
     }
 }

@@ -55,6 +55,8 @@ pub struct ShadowMaps {
 
 /// The strands are deposited in two halves, one per thread at most.
 const HALVES: usize = 2;
+/// Bands of texel rows of the front-to-back sum.
+const SUM_BANDS: usize = 8;
 
 impl ShadowMaps {
     /// Empty maps of `size`² texels each.
@@ -116,21 +118,39 @@ impl ShadowMaps {
         }
         let [p0, p1] = &mut self.partial;
         let (p0, p1) = (
-            p0.get_mut().unwrap_or_else(|e| e.into_inner()),
-            p1.get_mut().unwrap_or_else(|e| e.into_inner()),
+            &*p0.get_mut().unwrap_or_else(|e| e.into_inner()),
+            &*p1.get_mut().unwrap_or_else(|e| e.into_inner()),
         );
-        // Ω_i = everything deposited into maps 0..=i.
-        for ((texel, a), b) in self
-            .omega
-            .chunks_exact_mut(MAPS)
-            .zip(p0.chunks_exact(MAPS))
-            .zip(p1.chunks_exact(MAPS))
-        {
-            let mut acc = 0.0;
-            for ((o, x), y) in texel.iter_mut().zip(a).zip(b) {
-                acc += x + y;
-                *o = acc;
+        // Ω_i = everything deposited into maps 0..=i, in bands of texel rows on the pool (each
+        // texel's sum is the same whoever does it).
+        let row = self.size * MAPS;
+        let rows = self.size;
+        let mut rest: &mut [f32] = &mut self.omega;
+        let bands: [std::sync::Mutex<(usize, &mut [f32])>; SUM_BANDS] = std::array::from_fn(|c| {
+            let (r0, r1) = (c * rows / SUM_BANDS, (c + 1) * rows / SUM_BANDS);
+            let (mine, tail) = std::mem::take(&mut rest).split_at_mut((r1 - r0) * row);
+            rest = tail;
+            std::sync::Mutex::new((r0 * row, mine))
+        });
+        let sum = |c: usize| {
+            let mut g = bands[c].lock().unwrap_or_else(|e| e.into_inner());
+            let (at, ref mut out) = *g;
+            let n = out.len();
+            for ((texel, a), b) in out
+                .chunks_exact_mut(MAPS)
+                .zip(p0[at..at + n].chunks_exact(MAPS))
+                .zip(p1[at..at + n].chunks_exact(MAPS))
+            {
+                let mut acc = 0.0;
+                for ((o, x), y) in texel.iter_mut().zip(a).zip(b) {
+                    acc += x + y;
+                    *o = acc;
+                }
             }
+        };
+        match pool {
+            Some(p) => p.for_each(SUM_BANDS, &sum),
+            None => (0..SUM_BANDS).for_each(sum),
         }
     }
 
