@@ -49,7 +49,8 @@ pub struct ShadowMaps {
     omega: Vec<f32>,
     /// Light-space points of the frame (u, v in texels; z in metres).
     lp: Vec<[f32; 3]>,
-    /// What each half of the strands deposited, before the front-to-back sum.
+    /// What each half of the strands deposited, before the front-to-back sum: map-major, one
+    /// `size`² plane per map.
     partial: [std::sync::Mutex<Vec<f32>>; HALVES],
 }
 
@@ -132,19 +133,28 @@ impl ShadowMaps {
             rest = tail;
             std::sync::Mutex::new((r0 * row, mine))
         });
+        let plane = self.size * self.size;
         let sum = |c: usize| {
             let mut g = bands[c].lock().unwrap_or_else(|e| e.into_inner());
             let (at, ref mut out) = *g;
-            let n = out.len();
-            for ((texel, a), b) in out
-                .chunks_exact_mut(MAPS)
-                .zip(p0[at..at + n].chunks_exact(MAPS))
-                .zip(p1[at..at + n].chunks_exact(MAPS))
-            {
-                let mut acc = 0.0;
-                for ((o, x), y) in texel.iter_mut().zip(a).zip(b) {
-                    acc += x + y;
-                    *o = acc;
+            // From the map-major deposits to texel-major opacities (a lookup reads every map
+            // of a texel from one cache line).
+            // Runs of 64 texels, map by map, so that the reads are contiguous.
+            const RUN: usize = 64;
+            let first = at / MAPS;
+            for (k, run) in out.chunks_mut(RUN * MAPS).enumerate() {
+                let t0 = first + k * RUN;
+                let len = run.len() / MAPS;
+                let mut acc = [0.0f32; RUN];
+                for i in 0..MAPS {
+                    let (a, b) = (
+                        &p0[i * plane + t0..i * plane + t0 + len],
+                        &p1[i * plane + t0..i * plane + t0 + len],
+                    );
+                    for (j, (x, y)) in a.iter().zip(b).enumerate() {
+                        acc[j] += x + y;
+                        run[j * MAPS + i] = acc[j];
+                    }
                 }
             }
         };
@@ -217,11 +227,14 @@ impl ShadowMaps {
             let map = super::raster::ceil_pos(((z - self.z0) * inv_dz).min(top));
             let (xi, yi) = (x as i32 as usize, y as i32 as usize);
             let (fx, fy) = (x - xi as i32 as f32, y - yi as i32 as f32);
-            let base = (yi * s + xi) * MAPS + map;
+            // Deposits are map-major (one s² plane per map): the pieces of a strand mostly
+            // fall in one map, so successive splats touch nearby memory (texel-major, each
+            // splat touched four cache lines of a 1 MB array).
+            let base = map * s * s + yi * s + xi;
             m[base] += w * (1.0 - fx) * (1.0 - fy);
-            m[base + MAPS] += w * fx * (1.0 - fy);
-            m[base + s * MAPS] += w * (1.0 - fx) * fy;
-            m[base + (s + 1) * MAPS] += w * fx * fy;
+            m[base + 1] += w * fx * (1.0 - fy);
+            m[base + s] += w * (1.0 - fx) * fy;
+            m[base + s + 1] += w * fx * fy;
         }
     }
 

@@ -302,10 +302,32 @@ impl TileBuf {
         let dz = z1 - z0;
         let dc = [c1[0] - c0[0], c1[1] - c0[1], c1[2] - c0[2]];
         let mut fi = i0 as f32;
-        for i in i0..i1 {
+        // Columns come in groups of one culling block's width. A group whose whole extent
+        // (its minor range, and the segment's nearest depth over it) lies in opaque or
+        // body-hidden blocks is skipped in one test: every column of it would fail its own.
+        let mut group_end = i0;
+        let mut i = i0;
+        while i < i1 {
+            if i >= group_end {
+                group_end = ((i / BLOCK + 1) * BLOCK).min(i1);
+                let ta = (mx(maj0, fi) - maj0) * inv;
+                let tb = (mn(maj1, group_end as f32) - maj0) * inv;
+                let (ca, cb) = (min0 + ta * (min1 - min0), min0 + tb * (min1 - min0));
+                let zg = mn(z0 + ta * dz, z0 + tb * dz);
+                let g0 = floor_pos(mn(ca, cb) - h);
+                let g1 = ceil_pos(mx(ca, cb) + h).min(n);
+                if g1 <= g0 || self.column_hidden(Column::new(x_major, i, self.nb), g0, g1 - 1, zg)
+                {
+                    fi += (group_end - i) as f32;
+                    i = group_end;
+                    continue;
+                }
+            }
             let lo = mx(maj0, fi);
             let hi = mn(maj1, fi + 1.0);
             fi += 1.0;
+            let col_i = i;
+            i += 1;
             let cov_maj = hi - lo;
             if cov_maj <= 0.0 {
                 continue;
@@ -316,7 +338,7 @@ impl TileBuf {
             let (y_lo, y_hi) = (c - h, c + h);
             let j0 = floor_pos(y_lo);
             let j1 = ceil_pos(y_hi).min(n);
-            let col = Column::new(x_major, i, self.nb);
+            let col = Column::new(x_major, col_i, self.nb);
             if j1 <= j0 || self.column_hidden(col, j0, j1 - 1, z) {
                 continue;
             }
@@ -338,7 +360,7 @@ impl TileBuf {
             for j in js..je {
                 let cov = mx(mn(y_hi, fj + 1.0) - mx(y_lo, fj), 0.0);
                 fj += 1.0;
-                let at = i * stride_maj + j * stride_min;
+                let at = col_i * stride_maj + j * stride_min;
                 self.blend(at, col.block(j), z, w0, cov, &rgb);
             }
         }
