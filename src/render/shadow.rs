@@ -45,6 +45,7 @@ pub struct ShadowMaps {
     inv_texel: f32,
     z0: f32,
     dz: f32,
+    inv_dz: f32,
     /// Per texel (row-major), the [`MAPS`] values, front to back: one cache line per texel.
     omega: Vec<f32>,
     /// Light-space points of the frame (u, v in texels; z in metres).
@@ -72,6 +73,7 @@ impl ShadowMaps {
             inv_texel: 1.0,
             z0: 0.0,
             dz: 1.0,
+            inv_dz: 1.0,
             omega: vec![0.0; size * size * MAPS],
             lp: Vec::new(),
             partial: Default::default(),
@@ -196,6 +198,7 @@ impl ShadowMaps {
         self.v0 = lo[1] - 1.0 / self.inv_texel;
         self.z0 = lo[2];
         self.dz = ((hi[2] - lo[2]) / (MAPS - 1) as f32).max(1e-5);
+        self.inv_dz = 1.0 / self.dz;
         let (u0, v0, it) = (self.u0, self.v0, self.inv_texel);
         for q in &mut self.lp {
             q[0] = (q[0] - u0) * it;
@@ -211,9 +214,9 @@ impl ShadowMaps {
         // Pieces up to two texels long: the bilinear splat spreads each over a 2×2 footprint,
         // so the deposit stays continuous at half the cost of one piece per texel.
         let pieces = super::raster::ceil_pos(0.5 * len).max(1);
-        let w = len / pieces as f32;
         let step = 1.0 / pieces as f32;
-        let inv_dz = 1.0 / self.dz;
+        let w = len * step;
+        let inv_dz = self.inv_dz;
         let s = self.size;
         let max = (s - 2) as f32;
         let top = (MAPS - 1) as f32;
