@@ -476,7 +476,6 @@ impl Renderer {
             }
         };
         self.pool.for_each(CHUNKS, &gather);
-        drop(rows);
         out.width = self.width;
         out.height = self.height;
         out.rgb.resize(w * h * 3, 0);
@@ -493,7 +492,7 @@ impl Renderer {
             let mut g = bands[c].lock().unwrap_or_else(|e| e.into_inner());
             let (y0, y1, ref mut band) = *g;
             let mut row = scratch[c].lock().unwrap_or_else(|e| e.into_inner());
-            resolve::postfilter_rows(linear, w, h, y0..y1, s, lut, band, &mut row);
+            resolve::postfilter_rows((linear, w, h), y0..y1, s, lut, band, &mut row);
         };
         self.pool.for_each(CHUNKS, &job);
     }

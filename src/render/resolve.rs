@@ -103,7 +103,7 @@ impl Resolve<'_> {
 }
 
 /// The postfilter and sRGB encoding of rows `rows` of a `width`-pixel-wide frame of linear
-/// pixels `linear` (row-major, 3 floats each, `height` rows) into `out` (those rows' 8-bit
+/// pixels `linear` (row-major, 3 floats each, `height` rows; the three given together) into `out` (those rows' 8-bit
 /// pixels): (1 − s)·p + s·([1 2 1]ᵀ[1 2 1] / 16 ∗ p), on linear values, the frame's edge pixels
 /// repeated beyond it.
 ///
@@ -111,9 +111,7 @@ impl Resolve<'_> {
 /// (one pass over contiguous floats, which the compiler vectorises), then the horizontal
 /// [1 2 1] sum of that, three floats (one pixel) apart. `scratch` holds the vertical sum.
 pub(crate) fn postfilter_rows(
-    linear: &[f32],
-    width: usize,
-    height: usize,
+    (linear, width, height): (&[f32], usize, usize),
     rows: std::ops::Range<usize>,
     s: f32,
     lut: &[u8],
