@@ -329,35 +329,3 @@ fn step_report_counts_active_nodes() {
     assert_eq!(total as usize, sim.active_count());
     assert_eq!(r.counters.segments as usize, sim.active_count() - 2);
 }
-
-/// `rotate_min(a, b, x)` is `min_rotation(a, b) · x` (the strands are drawn with the former),
-/// for random directions, nearly equal ones and opposite ones.
-#[test]
-fn rotate_min_applies_the_min_rotation_to_a_vector() {
-    use nalgebra::Vector3;
-    use wisptree::solver::awt::forest::{min_rotation, rotate_min};
-    let mut state = 7u64;
-    let mut next = || {
-        state = state
-            .wrapping_mul(6_364_136_223_846_793_005)
-            .wrapping_add(1_442_695_040_888_963_407);
-        (state >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
-    };
-    let mut cases = Vec::new();
-    for _ in 0..200 {
-        let a = Vector3::new(next(), next(), next());
-        let b = Vector3::new(next(), next(), next());
-        cases.push((a, b));
-        cases.push((a, a + Vector3::new(1e-9, 0.0, 0.0)));
-        cases.push((a, -a * 2.0));
-    }
-    for (a, b) in cases {
-        let x = Vector3::new(0.3, -0.2, 0.05);
-        let want = min_rotation(&a, &b) * x;
-        let got = rotate_min(&a, &b, &x);
-        assert!(
-            (got - want).norm() < 1e-12,
-            "{a:?} {b:?}: {got:?} vs {want:?}"
-        );
-    }
-}

@@ -282,7 +282,8 @@ impl Simulation {
                 x - pos[f * k + i - 1]
             };
             let t_ref = m.rest_tangent(fin, f, i);
-            out.push(x + forest::rotate_min(&t_ref, &t_now, &m.strands.offset[s * k + i]));
+            let r = forest::min_rotation(&t_ref, &t_now);
+            out.push(x + r * m.strands.offset[s * k + i]);
         }
     }
 

@@ -104,23 +104,6 @@ pub fn min_rotation(from: &Vector3<f64>, to: &Vector3<f64>) -> Matrix3<f64> {
     Matrix3::identity() + vx + vx * vx * ((1.0 - c) / s2)
 }
 
-/// `min_rotation(from, to) * x`, without building the matrix (Rodrigues applied to the vector:
-/// R·x = x + v×x + v×(v×x)·(1 − c)/s², v = â×b̂, c = â·b̂, s² = |v|²). Drawing every strand of
-/// Long curly calls this for each of its points every frame; the matrix products cost a
-/// twentieth of a recording's CPU.
-pub fn rotate_min(from: &Vector3<f64>, to: &Vector3<f64>, x: &Vector3<f64>) -> Vector3<f64> {
-    let a = from.normalize();
-    let b = to.normalize();
-    let c = a.dot(&b);
-    let v = a.cross(&b);
-    let s2 = v.norm_squared();
-    if s2.is_nan() || s2 <= 1e-24 || !c.is_finite() {
-        return min_rotation(from, to) * x;
-    }
-    let vx = v.cross(x);
-    x + vx + v.cross(&vx) * ((1.0 - c) / s2)
-}
-
 fn normalize_or(v: Vector3<f64>, fallback: Vector3<f64>) -> Vector3<f64> {
     let n = v.norm();
     if n > 1e-12 {
