@@ -60,7 +60,7 @@ pub(crate) struct HalfBins {
 
 /// min(a, b) for numbers (one `minss`; `f32::min` adds NaN fix-ups on x86).
 #[inline(always)]
-fn mn(a: f32, b: f32) -> f32 {
+pub(crate) fn mn(a: f32, b: f32) -> f32 {
     if a < b {
         a
     } else {
@@ -70,7 +70,7 @@ fn mn(a: f32, b: f32) -> f32 {
 
 /// max(a, b) for numbers (one `maxss`).
 #[inline(always)]
-fn mx(a: f32, b: f32) -> f32 {
+pub(crate) fn mx(a: f32, b: f32) -> f32 {
     if a > b {
         a
     } else {

@@ -22,7 +22,7 @@
 //! samples outside its cross-section get coverage 0 and so add exactly nothing.
 
 use super::camera::View;
-use super::raster::{ceil_pos, floor_pos, SegRec, OPAQUE};
+use super::raster::{ceil_pos, floor_pos, mn, mx, SegRec, OPAQUE};
 
 /// Side of a culling block, samples (a power of two).
 const BLOCK: usize = 4;
@@ -30,26 +30,6 @@ const BLOCK: usize = 4;
 const SUPER: usize = 4;
 /// Samples of the fixed per-column window of thin lines.
 const WINDOW: usize = 4;
-
-/// min(a, b) for numbers (one `minss`; `f32::min` adds NaN fix-ups on x86).
-#[inline(always)]
-fn mn(a: f32, b: f32) -> f32 {
-    if a < b {
-        a
-    } else {
-        b
-    }
-}
-
-/// max(a, b) for numbers (one `maxss`).
-#[inline(always)]
-fn mx(a: f32, b: f32) -> f32 {
-    if a > b {
-        a
-    } else {
-        b
-    }
-}
 
 /// One tile's samples; reused from tile to tile.
 #[derive(Debug, Default)]
