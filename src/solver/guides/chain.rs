@@ -29,6 +29,10 @@ use nalgebra::{
     Matrix2, Matrix3, Matrix6, Matrix6x2, Quaternion, UnitQuaternion, Vector2, Vector3, Vector6,
 };
 
+/// The inverse of the fraction of its mass a vertex moves with under a force (see
+/// [`Chains::soft`]).
+pub const DAMP_MASS: f64 = 1.0;
+
 /// The motion of the body a chain's root is fixed to (the head), in spatial coordinates.
 #[derive(Debug, Clone, Copy)]
 pub struct Base {
@@ -77,6 +81,16 @@ pub struct Chains {
     pub v: Vec<Vector3<f64>>,
     /// Per vertex: external force on it this sub-step, N (the root's is ignored).
     pub f: Vec<Vector3<f64>>,
+    /// Per vertex: the sum of the damping coefficients of the forces in `f`, N·s/m (air drag,
+    /// link damping, contact damping and friction, each by the vertex's share).
+    pub damp: Vec<f64>,
+    /// Per vertex: the factor `1 / (1 + h C / m')` of backward Euler on the damping `C` of the
+    /// vertex's forces (`m Δv = h (f − C Δv)`), from the previous sub-step's `damp`, with `m'`
+    /// half the vertex's mass (a vertex of a chain moves as if lighter: its parents give way).
+    /// Links and contacts scale their whole force by the smallest factor of their vertices,
+    /// so action and reaction stay equal. Explicit, the damping of the tens of contacts of a
+    /// vertex in dense short hair overshoots and feeds a whip.
+    pub soft: Vec<f64>,
     /// Largest joint rate reached by [`Chains::integrate`] since the last reset, rad/s (a
     /// diagnostic: nothing limits the rates).
     pub peak_rate: f64,
@@ -210,6 +224,8 @@ impl Chains {
         c.x.resize(verts, Vector3::zeros());
         c.v.resize(verts, Vector3::zeros());
         c.f.resize(verts, Vector3::zeros());
+        c.damp.resize(verts, 0.0);
+        c.soft.resize(verts, 1.0);
         let sc = &mut c.scratch;
         sc.s.resize(n, Matrix6x2::zeros());
         sc.u.resize(n, Matrix6x2::zeros());

@@ -420,7 +420,12 @@ impl GuideSolver {
                 let l = g * n + (v % (n + 1)).saturating_sub(1).min(n - 1);
                 let wind =
                     crate::solver::awt::dynamics::wind_at(&self.params, &self.chains.x[v], t);
-                self.chains.f[v] = (wind - self.chains.v[v]) * (drag * self.chains.m[l]);
+                let c = drag * self.chains.m[l];
+                let soft = 1.0
+                    / (1.0 + h * chain::DAMP_MASS * (self.chains.damp[v] + c) / self.chains.m[l]);
+                self.chains.soft[v] = soft;
+                self.chains.f[v] = (wind - self.chains.v[v]) * (c * soft);
+                self.chains.damp[v] = c;
             }
         }
         if !self.settling && self.gp.link_strength > 0.0 {
