@@ -47,7 +47,6 @@ fn test_chain(k: f64, damping: f64) -> (Chains, Vector3<f64>) {
 /// 2 s with sub-step `h`, checking segment lengths on the way.
 fn energy_drift(h: f64) -> (f64, f64) {
     let (mut c, root) = test_chain(0.0, 0.0);
-    c.max_rate = f64::INFINITY; // the dynamics alone, without the safety limit
     let base = still_base();
     let g = Vector3::new(0.0, -9.81, 0.0);
     c.fk(0, &base, &root);
@@ -100,8 +99,8 @@ fn displaced_chain_returns_to_rest() {
     base.acc = Vector6::zeros(); // no gravity: the rest shape is the equilibrium
     c.fk(0, &base, &root);
     let rest = c.x[..11].to_vec();
-    c.q[3] = nalgebra::Vector2::new(0.6, -0.4);
-    c.q[7] = nalgebra::Vector2::new(-0.5, 0.8);
+    c.set_swing(3, nalgebra::Vector2::new(0.6, -0.4));
+    c.set_swing(7, nalgebra::Vector2::new(-0.5, 0.8));
     c.fk(0, &base, &root);
     let off = (0..11)
         .map(|i| (c.x[i] - rest[i]).norm())
@@ -422,10 +421,11 @@ fn dense_strands_move_rigidly_with_rigidly_moved_guides() {
 }
 
 /// Every paper style under every motion for 10 s (with fewer guides, to keep the file fast):
-/// the state stays finite and valid, every vertex within its guide's length of its root, and
-/// the kinetic energy bounded.
+/// at every step the state stays finite and valid, every vertex within its guide's length of
+/// its root, and the kinetic energy bounded (below every vertex moving at 10 m/s). Nothing
+/// limits the joint rates: the largest one reached is printed with the largest energy.
 fn stable_for_10_s(style: &str) {
-    for motion in ["lean", "run", "jump", "shake", "stop"] {
+    for motion in ["still", "lean", "run", "jump", "shake", "stop"] {
         let mut s = solver(style, motion, |g| {
             g.count = 24;
             g.max_inserted = 8;
@@ -433,31 +433,35 @@ fn stable_for_10_s(style: &str) {
         let n = s.guide_params().segments;
         let mut r = s.new_report();
         let steps = (10.0 / s.dt()).round() as usize;
-        let mass = s.params().total_mass * 24.0 / 24.0;
+        let bound = 0.5 * s.params().total_mass * 100.0;
+        s.chains.peak_rate = 0.0;
+        let mut worst: f64 = 0.0;
         for k in 0..steps {
             s.step(&mut r);
-            if k % 25 == 0 {
-                s.validate()
-                    .unwrap_or_else(|e| panic!("{style} {motion} step {k}: {e}"));
-                for &g in s.alive() {
-                    let total: f64 = s.chains.len[g * n..(g + 1) * n].iter().sum();
-                    let root = s.chains.x[g * (n + 1)];
-                    for i in 1..=n {
-                        let d = (s.chains.x[g * (n + 1) + i] - root).norm();
-                        assert!(
-                            d <= total + 1e-9,
-                            "{style} {motion}: guide {g} out of reach"
-                        );
-                    }
+            s.validate()
+                .unwrap_or_else(|e| panic!("{style} {motion} step {k}: {e}"));
+            for &g in s.alive() {
+                let total: f64 = s.chains.len[g * n..(g + 1) * n].iter().sum();
+                let root = s.chains.x[g * (n + 1)];
+                for i in 1..=n {
+                    let d = (s.chains.x[g * (n + 1) + i] - root).norm();
+                    assert!(
+                        d <= total + 1e-9,
+                        "{style} {motion} step {k}: guide {g} out of reach"
+                    );
                 }
-                // Below every vertex moving at 10 m/s.
-                let ke = r.counters.kinetic_energy;
-                assert!(
-                    ke.is_finite() && ke < 0.5 * mass * 100.0,
-                    "{style} {motion}: {ke} J"
-                );
             }
+            let ke = r.counters.kinetic_energy;
+            assert!(
+                ke.is_finite() && ke < bound,
+                "{style} {motion} step {k}: {ke} J (bound {bound} J)"
+            );
+            worst = worst.max(ke);
         }
+        eprintln!(
+            "{style} {motion}: max kinetic energy {worst:.3} J, peak joint rate {:.1} rad/s, {} split steps",
+            s.chains.peak_rate, s.splits
+        );
     }
 }
 

@@ -50,8 +50,8 @@ fn chang_fig6_braid_crosses_only_without_collision() {
     );
 }
 
-/// The sphere stops after 1 s; 4 s after it the interacting brush (3.6 s in the full run) is
-/// still, the other (4.9 s) still moving (`null`).
+/// The sphere stops after 1 s; in the half-length run the interacting brush is still 3.9 s
+/// after it (4.7 s in the full run), the other still moving (`null`; 5.0 s in the full run).
 #[test]
 fn chang_fig7_brush_settles_faster_with_interaction() {
     let runs = run("chang-fig7", 0.5);

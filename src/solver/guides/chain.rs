@@ -4,11 +4,19 @@
 //! Link `i` of a guide is the segment from vertex `i` to vertex `i + 1`; its joint sits at
 //! vertex `i` and has two rotational degrees of freedom, no twist (§3.1: "twisting of a hair
 //! strand along its axis is prohibited", two cascading 1-D revolute joints). The link frame has
-//! its `y` axis along the segment; the child frame is
-//! `parent · R₀ · Rx(a) · Rz(b)`, with `R₀` the rest rotation from the parent frame, so the
-//! rest angles are zero and the actuators (§3.2: a hinge spring with damping towards the rest
-//! angles) pull `(a, b)` back to 0. Positions come from the angles by forward kinematics, so
-//! segment lengths are exact by construction.
+//! its `y` axis along the segment; the child frame is `parent · R₀ · J`, with `R₀` the rest
+//! rotation from the parent frame and `J` the joint's rotation (identity at rest).
+//!
+//! The joint state is kept as the rotation `J` itself (a unit quaternion), not as two angles:
+//! the joint's two degrees of freedom are its rates of swing about the link's own `x` and `z`
+//! axes (the two axes perpendicular to the segment, in the *current* frame), so the relative
+//! angular velocity never has a component along the segment (no twist) and no chart of angles
+//! ever reaches a singularity (an `Rx(a)·Rz(b)` chart has a gimbal lock at `b = ±π/2`, where `a`
+//! turns the segment about itself). A step turns `J` by `exp(h (ȧ, 0, ḃ))` in the link frame.
+//! The actuator (§3.2: a hinge spring with damping towards the rest angles) is the spring
+//! `½ k |log J|²`; its generalized force is `−k` times the swing part of `log J`, and it is
+//! integrated implicitly together with the damping. Positions come from the rotations by
+//! forward kinematics, so segment lengths are exact by construction.
 //!
 //! Spatial vectors are Plücker coordinates at the world origin, `(angular; linear)`; a link
 //! lumps its mass at its end vertex with a small isotropic rotational inertia about it (the
@@ -17,10 +25,13 @@
 //! Storage is structure-of-arrays over all guides: link `l = g · n + i`, vertex
 //! `g · (n + 1) + i`.
 
-use nalgebra::{Matrix2, Matrix3, Matrix6, Matrix6x2, Vector2, Vector3, Vector6};
+use nalgebra::{
+    Matrix2, Matrix3, Matrix6, Matrix6x2, Quaternion, UnitQuaternion, Vector2, Vector3, Vector6,
+};
 
-/// Default largest joint rate, rad/s (about 10 turns per second).
-pub const MAX_RATE: f64 = 60.0;
+/// The inverse of the fraction of its mass a vertex moves with under a force (see
+/// [`Chains::soft`]).
+pub const DAMP_MASS: f64 = 1.0;
 
 /// The motion of the body a chain's root is fixed to (the head), in spatial coordinates.
 #[derive(Debug, Clone, Copy)]
@@ -47,9 +58,10 @@ pub struct Chains {
     pub len: Vec<f64>,
     /// Per link: rest rotation from the parent frame (the head for link 0).
     pub r0: Vec<Matrix3<f64>>,
-    /// Per link: joint angles `(a, b)` and their rates.
-    pub q: Vec<Vector2<f64>>,
-    /// Per link: joint angle rates, rad/s.
+    /// Per link: joint rotation `J` (identity at rest; the child frame is `parent · R₀ · J`).
+    pub q: Vec<UnitQuaternion<f64>>,
+    /// Per link: joint rates, rad/s: the child's angular velocity relative to its parent, along
+    /// the child's own `x` and `z` axes (perpendicular to the segment).
     pub qd: Vec<Vector2<f64>>,
     /// Per link: actuator spring, N·m/rad, and damping, N·m·s/rad.
     pub k: Vec<f64>,
@@ -69,9 +81,19 @@ pub struct Chains {
     pub v: Vec<Vector3<f64>>,
     /// Per vertex: external force on it this sub-step, N (the root's is ignored).
     pub f: Vec<Vector3<f64>>,
-    /// Largest joint rate, rad/s ([`MAX_RATE`] unless changed): a safety limit, see
-    /// [`Chains::integrate`].
-    pub max_rate: f64,
+    /// Per vertex: the sum of the damping coefficients of the forces in `f`, N·s/m (air drag,
+    /// link damping, contact damping and friction, each by the vertex's share).
+    pub damp: Vec<f64>,
+    /// Per vertex: the factor `1 / (1 + h C / m')` of backward Euler on the damping `C` of the
+    /// vertex's forces (`m Δv = h (f − C Δv)`), from the previous sub-step's `damp`, with `m'`
+    /// half the vertex's mass (a vertex of a chain moves as if lighter: its parents give way).
+    /// Links and contacts scale their whole force by the smallest factor of their vertices,
+    /// so action and reaction stay equal. Explicit, the damping of the tens of contacts of a
+    /// vertex in dense short hair overshoots and feeds a whip.
+    pub soft: Vec<f64>,
+    /// Largest joint rate reached by [`Chains::integrate`] since the last reset, rad/s (a
+    /// diagnostic: nothing limits the rates).
+    pub peak_rate: f64,
     scratch: Scratch,
 }
 
@@ -90,14 +112,23 @@ fn skew(v: &Vector3<f64>) -> Matrix3<f64> {
     Matrix3::new(0.0, -v.z, v.y, v.z, 0.0, -v.x, -v.y, v.x, 0.0)
 }
 
-fn rx(a: f64) -> Matrix3<f64> {
-    let (s, c) = a.sin_cos();
-    Matrix3::new(1.0, 0.0, 0.0, 0.0, c, -s, 0.0, s, c)
+/// `log J` as a rotation vector (angle in [0, π]).
+pub fn log(q: &UnitQuaternion<f64>) -> Vector3<f64> {
+    let (w, v) = (q.w, q.imag());
+    let (w, v) = if w < 0.0 { (-w, -v) } else { (w, v) };
+    let s = v.norm();
+    if s < 1e-12 {
+        return v * 2.0;
+    }
+    v * (2.0 * s.atan2(w) / s)
 }
 
-fn rz(b: f64) -> Matrix3<f64> {
-    let (s, c) = b.sin_cos();
-    Matrix3::new(c, -s, 0.0, s, c, 0.0, 0.0, 0.0, 1.0)
+/// `exp` of a rotation vector.
+fn exp(r: &Vector3<f64>) -> UnitQuaternion<f64> {
+    let t = r.norm();
+    let half = 0.5 * t;
+    let k = if t < 1e-8 { 0.5 } else { half.sin() / t };
+    UnitQuaternion::new_unchecked(Quaternion::new(half.cos(), r.x * k, r.y * k, r.z * k))
 }
 
 fn ang(v: &Vector6<f64>) -> Vector3<f64> {
@@ -141,18 +172,21 @@ fn inertia(m: f64, j: f64, c: &Vector3<f64>) -> Matrix6<f64> {
 /// The rotation taking unit `a` to unit `b` about `a × b` (identity if equal; a half turn
 /// about a perpendicular axis if opposite).
 pub fn min_rotation(a: &Vector3<f64>, b: &Vector3<f64>) -> Matrix3<f64> {
-    match nalgebra::Rotation3::rotation_between(a, b) {
-        Some(r) => *r.matrix(),
-        None => {
-            let p = if a.x.abs() < 0.9 {
-                Vector3::x()
-            } else {
-                Vector3::z()
-            };
-            let axis = nalgebra::Unit::new_normalize(a.cross(&p));
-            *nalgebra::Rotation3::from_axis_angle(&axis, std::f64::consts::PI).matrix()
-        }
+    // `I + [c]× + [c]×² / (1 + a·b)` with `c = a × b`: no `acos`, so nearly equal directions
+    // (a dot product rounded above 1) give a rotation near the identity, never NaN.
+    let c = a.cross(b);
+    let d = a.dot(b);
+    if 1.0 + d > 1e-9 {
+        let k = skew(&c);
+        return Matrix3::identity() + k + k * k / (1.0 + d);
     }
+    let p = if a.x.abs() < 0.9 {
+        Vector3::x()
+    } else {
+        Vector3::z()
+    };
+    let axis = nalgebra::Unit::new_normalize(a.cross(&p));
+    *nalgebra::Rotation3::from_axis_angle(&axis, std::f64::consts::PI).matrix()
 }
 
 /// Wraps an angle difference into (−π, π].
@@ -173,14 +207,13 @@ impl Chains {
         let verts = (n + 1) * capacity;
         let mut c = Chains {
             n,
-            max_rate: MAX_RATE,
             ..Default::default()
         };
         c.root_rest.resize(capacity, Vector3::zeros());
         c.alive.resize(capacity, false);
         c.len.resize(links, 0.0);
         c.r0.resize(links, Matrix3::identity());
-        c.q.resize(links, Vector2::zeros());
+        c.q.resize(links, UnitQuaternion::identity());
         c.qd.resize(links, Vector2::zeros());
         c.k.resize(links, 0.0);
         c.c.resize(links, 0.0);
@@ -191,6 +224,8 @@ impl Chains {
         c.x.resize(verts, Vector3::zeros());
         c.v.resize(verts, Vector3::zeros());
         c.f.resize(verts, Vector3::zeros());
+        c.damp.resize(verts, 0.0);
+        c.soft.resize(verts, 1.0);
         let sc = &mut c.scratch;
         sc.s.resize(n, Matrix6x2::zeros());
         sc.u.resize(n, Matrix6x2::zeros());
@@ -241,7 +276,7 @@ impl Chains {
             self.len[l] = len;
             self.m[l] = mass / n as f64;
             self.j[l] = self.m[l] * (0.25 * len).powi(2);
-            self.q[l] = Vector2::zeros();
+            self.q[l] = UnitQuaternion::identity();
             self.qd[l] = Vector2::zeros();
         }
         for i in 0..n {
@@ -253,6 +288,21 @@ impl Chains {
             self.k[l] = k * inertia * taper;
             self.c[l] = damp * inertia * taper;
         }
+    }
+
+    /// Largest joint rate of guide `g`, rad/s.
+    pub fn max_rate(&self, g: usize) -> f64 {
+        let n = self.n;
+        self.qd[g * n..(g + 1) * n]
+            .iter()
+            .map(|q| q.norm())
+            .fold(0.0, f64::max)
+    }
+
+    /// Puts joint `l` at the rotation `exp((a, 0, b))` from its rest orientation: a swing by
+    /// `|(a, b)|` rad about an axis perpendicular to the segment (for tests and set-ups).
+    pub fn set_swing(&mut self, l: usize, swing: Vector2<f64>) {
+        self.q[l] = exp(&Vector3::new(swing.x, 0.0, swing.y));
     }
 
     /// Forward kinematics of guide `g`: link rotations, vertex positions and velocities, link
@@ -267,16 +317,14 @@ impl Chains {
         let mut vp = base.vel;
         for i in 0..n {
             let l = g * n + i;
-            let (a, b) = (self.q[l].x, self.q[l].y);
-            let ax = parent * self.r0[l];
-            let u1 = ax.column(0).into_owned();
-            let qf = ax * rx(a);
-            let u2 = qf.column(2).into_owned();
-            let cf = qf * rz(b);
+            let cf = parent * self.r0[l] * self.q[l].to_rotation_matrix().into_inner();
+            let u1 = cf.column(0).into_owned();
+            let u2 = cf.column(2).into_owned();
             let p = self.x[v0 + i];
             let s1 = six(u1, p.cross(&u1));
             let s2 = six(u2, p.cross(&u2));
-            let vs = vp + s1 * self.qd[l].x + s2 * self.qd[l].y;
+            let sq = s1 * self.qd[l].x + s2 * self.qd[l].y;
+            let vs = vp + sq;
             let end = p + cf.column(1) * self.len[l];
             self.x[v0 + i + 1] = end;
             self.v[v0 + i + 1] = lin(&vs) + ang(&vs).cross(&end);
@@ -286,20 +334,17 @@ impl Chains {
             s.set_column(0, &s1);
             s.set_column(1, &s2);
             self.scratch.s[i] = s;
-            // Ṡ q̇: the first axis is fixed in the parent, the second in the child.
-            self.scratch.c[i] =
-                cross_motion(&vp, &s1) * self.qd[l].x + cross_motion(&vs, &s2) * self.qd[l].y;
+            // Ṡ q̇: both axes are fixed in the child, so Ṡ = v × S, and v × S q̇ = v_p × S q̇.
+            self.scratch.c[i] = cross_motion(&vp, &sq);
             parent = cf;
             vp = vs;
         }
     }
 
     /// Joint accelerations of guide `g` by the articulated-body algorithm (three passes, linear
-    /// time), then one semi-implicit Euler step of length `h`. Uses the kinematics of the last
-    /// [`Chains::fk`] of this guide and its vertex forces `f`. Joint rates are limited to
-    /// `max_rate`: with the few-segment guides and the explicit contact forces, a guide whipped
-    /// by a fast head motion can otherwise gain energy without bound (a known limitation: the
-    /// limit keeps the paper styles stable under every motion).
+    /// time), then one semi-implicit Euler step of length `h`: the rates first, then each joint
+    /// turned by `exp(h (ȧ, 0, ḃ))` about its current axes. Uses the kinematics of the last
+    /// [`Chains::fk`] of this guide and its vertex forces `f`.
     pub fn integrate(&mut self, g: usize, base: &Base, h: f64) {
         let n = self.n;
         let v0 = g * (n + 1);
@@ -312,9 +357,12 @@ impl Chains {
             let fe = self.f[v0 + i + 1];
             sc.pa[i] = cross_force(&vs, &(sc.ia[i] * vs)) - six(c.cross(&fe), fe);
             // The actuators are integrated implicitly (their torque at the end of the step):
-            // τ = −k(q + h q̇ + h² q̈) − c(q̇ + h q̈). The q̈ terms move into the joint-space
+            // τ = −k(θ + h q̇ + h² q̈) − c(q̇ + h q̈), θ the swing part of log J (the gradient of
+            // ½ k |log J|² along the joint's two axes). The q̈ terms move into the joint-space
             // inertia below, so stiff actuators stay stable at any step.
-            sc.tau[i] = -(self.q[l] + self.qd[l] * h) * self.k[l] - self.qd[l] * self.c[l];
+            let th = log(&self.q[l]);
+            let th = Vector2::new(th.x, th.z);
+            sc.tau[i] = -(th + self.qd[l] * h) * self.k[l] - self.qd[l] * self.c[l];
         }
         for i in (0..n).rev() {
             let s = sc.s[i];
@@ -334,61 +382,56 @@ impl Chains {
             }
         }
         let mut a = base.acc;
+        let mut peak = self.peak_rate;
         for i in 0..n {
             let l = g * n + i;
             let ap = a + sc.c[i];
             let qdd = sc.dinv[i] * (sc.tau[i] - sc.u[i].transpose() * ap);
             a = ap + sc.s[i] * qdd;
             self.qd[l] += qdd * h;
-            // Safety limit on joint rates. Near b = ±π/2 the first axis lies along the segment
-            // and only the small rotational inertia resists it, so a fast head motion can spin
-            // a joint up; the rates of real hair stay far below this.
-            let r = self.qd[l].norm();
-            if r > self.max_rate {
-                self.qd[l] *= self.max_rate / r;
-            }
-            self.q[l] += self.qd[l] * h;
+            let w = self.qd[l] * h;
+            let mut q = self.q[l] * exp(&Vector3::new(w.x, 0.0, w.y));
+            q.renormalize_fast();
+            self.q[l] = q;
+            peak = peak.max(self.qd[l].norm());
         }
+        self.peak_rate = peak;
     }
 
-    /// Joint angles of guide `g` that put its segments along `pts` (`n + 1` points, root
-    /// first; only directions are used, lengths stay the chain's). The inverse of the forward
-    /// kinematics for the twist-free parametrization: `b = −asin dₓ`, `a = atan2(d_z, d_y)` with
-    /// `d` the segment direction in the frame `parent · R₀`, on the branch (and turn) nearest
-    /// the chain's current angles.
-    pub fn angles_from(
-        &self,
-        g: usize,
-        rot: &Matrix3<f64>,
-        pts: &[Vector3<f64>],
-        out: &mut [Vector2<f64>],
-    ) {
+    /// Puts guide `g` in the configuration of the points `pts` (`n + 1`, root first; only the
+    /// segment directions are used, lengths stay the chain's) moving with the vertex velocities
+    /// `vel`, for the head `base`. Needs the kinematics of the last [`Chains::fk`] of this guide
+    /// with the same head: each link is turned from its current frame by the smallest rotation
+    /// onto its new direction (so no twist is introduced and there is no singular pose), and
+    /// each joint takes the rates that give its end vertex the velocity `vel` perpendicular to
+    /// the segment (the component along it is fixed by the segment's length), root to tip.
+    /// Call [`Chains::fk`] next.
+    pub fn set_state(&mut self, g: usize, base: &Base, pts: &[Vector3<f64>], vel: &[Vector3<f64>]) {
         let n = self.n;
-        let mut parent = *rot;
+        let v0 = g * (n + 1);
+        let mut parent = base.rot;
+        let mut wp = ang(&base.vel);
+        let mut vx = lin(&base.vel) + wp.cross(&self.x[v0]);
         for i in 0..n {
             let l = g * n + i;
-            let ax = parent * self.r0[l];
-            let d = pts[i + 1] - pts[i];
-            let d = ax.transpose() * (d / d.norm().max(1e-12));
-            let b = (-d.x).clamp(-1.0, 1.0).asin();
-            let a = d.z.atan2(d.y);
-            // (a, b) and (a + π, π − b) give the same direction but frames half a turn apart:
-            // keep the branch nearest the chain's current angles, so a correction never swaps
-            // it (that would twist everything below by π).
-            let cur = self.q[l];
-            let near = |x: f64, r: f64| r + wrap(x - r);
-            let p1 = Vector2::new(near(a, cur.x), near(b, cur.y));
-            let p2 = Vector2::new(
-                near(a + std::f64::consts::PI, cur.x),
-                near(std::f64::consts::PI - b, cur.y),
+            let cur = self.rot[l];
+            let dc = cur.column(1).into_owned();
+            let d = (pts[i + 1] - pts[i]).try_normalize(1e-12).unwrap_or(dc);
+            let child = min_rotation(&dc, &d) * cur;
+            let jm = (parent * self.r0[l]).transpose() * child;
+            let mut q = UnitQuaternion::from_rotation_matrix(
+                &nalgebra::Rotation3::from_matrix_unchecked(jm),
             );
-            let (a, b) = if (p2 - cur).norm_squared() < (p1 - cur).norm_squared() {
-                (p2.x, p2.y)
-            } else {
-                (p1.x, p1.y)
-            };
-            out[i] = Vector2::new(a, b);
-            parent = ax * rx(a) * rz(b);
+            q.renormalize();
+            self.q[l] = q;
+            let len = self.len[l];
+            let dv = vel[i + 1] - vx;
+            let w = d * wp.dot(&d) + d.cross(&dv) / len;
+            let rel = w - wp;
+            self.qd[l] = Vector2::new(child.column(0).dot(&rel), child.column(2).dot(&rel));
+            vx += w.cross(&(d * len));
+            parent = child;
+            wp = w;
         }
     }
 
@@ -404,7 +447,7 @@ impl Chains {
             let vs = self.vs[l];
             e += 0.5 * vs.dot(&(inertia(self.m[l], self.j[l], &c) * vs));
             e -= self.m[l] * gravity.dot(&c);
-            e += 0.5 * self.k[l] * self.q[l].norm_squared();
+            e += 0.5 * self.k[l] * log(&self.q[l]).norm_squared();
         }
         e
     }

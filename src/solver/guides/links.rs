@@ -182,7 +182,11 @@ impl Links {
             }
             intact += 1;
             let m = chains.m[l].min(chains.m[o]);
-            let f = -(d * (strength * stiffness_factor(s)) + (vp - va) * damping) * m;
+            let soft = chains.soft[ov]
+                .min(chains.soft[ov + 1])
+                .min(chains.soft[v])
+                .min(chains.soft[v + 1]);
+            let f = -(d * (strength * stiffness_factor(s)) + (vp - va) * damping) * (m * soft);
             // The point's share goes to its segment's ends; the reaction to the owner's ends,
             // split by where the rest point projects on the owner segment.
             chains.f[ov] += f * (1.0 - t);
@@ -190,6 +194,11 @@ impl Links {
             let ta = (self.p0[k].y / chains.len[l]).clamp(0.0, 1.0);
             chains.f[v] -= f * (1.0 - ta);
             chains.f[v + 1] -= f * ta;
+            let c = damping * m;
+            chains.damp[ov] += c * (1.0 - t);
+            chains.damp[ov + 1] += c * t;
+            chains.damp[v] += c * (1.0 - ta);
+            chains.damp[v + 1] += c * ta;
         }
         intact
     }

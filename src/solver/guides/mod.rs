@@ -33,8 +33,11 @@ use links::Links;
 pub use params::{GuideParams, StripLayout};
 use strips::Strips;
 
-/// Time offset that turns corrected vertex velocities into joint rates, s.
-const EPS: f64 = 1e-5;
+/// Largest angle a joint may turn in one integration step, rad.
+const MAX_TURN: f64 = 0.1;
+
+/// Most pieces a guide's sub-step is split into.
+const MAX_SPLIT: f64 = 32.0;
 
 /// Marks "no guide".
 pub const NO_GUIDE: u32 = u32::MAX;
@@ -84,13 +87,12 @@ pub struct GuideSolver {
     settling: bool,
     spheres: Vec<PosedSphere>,
     buf: Vec<Vector3<f64>>,
-    qbuf: Vec<Vector2<f64>>,
-    qold: Vec<Vector2<f64>>,
-    qeps: Vec<Vector2<f64>>,
     vbuf: Vec<Vector3<f64>>,
     disp: Vec<Vector3<f64>>,
     last_contacts: usize,
     last_body: usize,
+    /// Integration steps taken by guides whose sub-step was split (see [`MAX_TURN`]).
+    pub splits: u64,
 }
 
 /// The head's spatial velocity `(ω; v_O)` at the world origin.
@@ -180,13 +182,11 @@ impl GuideSolver {
             settling: false,
             spheres: Vec::new(),
             buf: vec![Vector3::zeros(); n + 1],
-            qbuf: vec![Vector2::zeros(); n],
-            qold: vec![Vector2::zeros(); n],
-            qeps: vec![Vector2::zeros(); n],
             vbuf: vec![Vector3::zeros(); n + 1],
             disp: vec![Vector3::zeros(); cap * (n + 1)],
             last_contacts: 0,
             last_body: 0,
+            splits: 0,
             model,
             motion,
             params,
@@ -412,17 +412,6 @@ impl GuideSolver {
         } else {
             self.motion.pose(t)
         };
-        let rot_eps = if self.settling {
-            base1.rot
-        } else {
-            *self
-                .motion
-                .pose(t + h + EPS)
-                .iso
-                .rotation
-                .to_rotation_matrix()
-                .matrix()
-        };
         self.posed_spheres(&pose1, t + h);
         let n = self.gp.segments;
         let drag = self.params.air_drag;
@@ -431,7 +420,12 @@ impl GuideSolver {
                 let l = g * n + (v % (n + 1)).saturating_sub(1).min(n - 1);
                 let wind =
                     crate::solver::awt::dynamics::wind_at(&self.params, &self.chains.x[v], t);
-                self.chains.f[v] = (wind - self.chains.v[v]) * (drag * self.chains.m[l]);
+                let c = drag * self.chains.m[l];
+                let soft = 1.0
+                    / (1.0 + h * chain::DAMP_MASS * (self.chains.damp[v] + c) / self.chains.m[l]);
+                self.chains.soft[v] = soft;
+                self.chains.f[v] = (wind - self.chains.v[v]) * (c * soft);
+                self.chains.damp[v] = c;
             }
         }
         if !self.settling && self.gp.link_strength > 0.0 {
@@ -456,10 +450,36 @@ impl GuideSolver {
             let root1 = pose1
                 .transform_point(&Point3::from(self.chains.root_rest[g]))
                 .coords;
-            self.qold
-                .copy_from_slice(&self.chains.q[g * n..(g + 1) * n]);
+            // A guide whose fastest joint would turn more than MAX_TURN in the sub-step is
+            // integrated in shorter steps (a whipped tip of a few-millimetre link turns at
+            // 10³ rad/s): the velocity-product terms of the articulated-body step are explicit,
+            // and they add energy once a joint turns by a sizeable angle per step.
             self.chains.fk(g, &base0, &root0);
-            self.chains.integrate(g, &base0, h);
+            let mut tau = 0.0;
+            loop {
+                let left = h - tau;
+                let turn = self.chains.max_rate(g) * left;
+                if tau == 0.0 && turn <= MAX_TURN {
+                    self.chains.integrate(g, &base0, h);
+                    break;
+                }
+                let hs = if turn <= MAX_TURN {
+                    left
+                } else {
+                    (left * MAX_TURN / turn).max(h / MAX_SPLIT).min(left)
+                };
+                self.splits += 1;
+                let (b, p) = self.base_at(t + tau, hs);
+                let root = p
+                    .transform_point(&Point3::from(self.chains.root_rest[g]))
+                    .coords;
+                self.chains.fk(g, &b, &root);
+                self.chains.integrate(g, &b, hs);
+                tau += hs;
+                if tau >= h * (1.0 - 1e-9) {
+                    break;
+                }
+            }
             self.chains.fk(g, &base1, &root1);
             self.buf.copy_from_slice(&self.chains.x[vr.clone()]);
             self.vbuf.copy_from_slice(&self.chains.v[vr]);
@@ -473,17 +493,9 @@ impl GuideSolver {
             );
             if p > 0 {
                 pushed += p;
-                self.chains
-                    .angles_from(g, &base1.rot, &self.buf, &mut self.qbuf);
-                for i in 0..=n {
-                    self.buf[i] += self.vbuf[i] * EPS;
-                }
-                self.chains
-                    .angles_from(g, &rot_eps, &self.buf, &mut self.qeps);
-                for i in 0..n {
-                    self.chains.q[g * n + i] = self.qbuf[i];
-                    self.chains.qd[g * n + i] = (self.qeps[i] - self.qbuf[i]) / EPS;
-                }
+                // Back to joint space (§3.3): each corrected segment direction by the smallest
+                // turn of its link, each joint's rates from the corrected vertex velocities.
+                self.chains.set_state(g, &base1, &self.buf, &self.vbuf);
                 self.chains.fk(g, &base1, &root1);
             }
         }
@@ -521,29 +533,15 @@ impl GuideSolver {
     }
 
     /// Puts guide `g` in the configuration `pts` (`n + 1` world points, root first, directions
-    /// only) moving with `vel` (world vertex velocities, through the angle change over a short
-    /// interval). Used for insertion and by tests.
+    /// only) moving with `vel` (world vertex velocities; only their parts that the joints can
+    /// produce). Used for insertion and by tests.
     pub fn set_guide_state(&mut self, g: usize, pts: &[Vector3<f64>], vel: &[Vector3<f64>]) {
-        let n = self.gp.segments;
-        let h = 1e-4;
-        let rot_now = *self.pose.iso.rotation.to_rotation_matrix().matrix();
-        let prev_pose = self.motion.pose((self.time - h).max(0.0));
-        let rot_prev = *prev_pose.iso.rotation.to_rotation_matrix().matrix();
-        for i in 0..=n {
-            self.buf[i] = pts[i] - vel[i] * h;
-        }
-        self.chains
-            .angles_from(g, &rot_prev, &self.buf, &mut self.qold);
-        self.chains.angles_from(g, &rot_now, pts, &mut self.qbuf);
-        for i in 0..n {
-            let dq = (self.qbuf[i] - self.qold[i]).map(chain::wrap);
-            self.chains.q[g * n + i] = self.qbuf[i];
-            self.chains.qd[g * n + i] = dq / h;
-        }
         let (base, pose) = self.base_at(self.time, self.params.dt);
         let root = pose
             .transform_point(&Point3::from(self.chains.root_rest[g]))
             .coords;
+        self.chains.fk(g, &base, &root);
+        self.chains.set_state(g, &base, pts, vel);
         self.chains.fk(g, &base, &root);
     }
 }

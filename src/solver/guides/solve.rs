@@ -77,6 +77,7 @@ impl Solver for GuideSolver {
             self.strips
                 .detect(&self.chains, &self.alive, 2.0 * self.gp.contact_distance);
         }
+        let splits0 = self.splits;
         for _ in 0..sub {
             let (c, b) = self.substep(h);
             contacts += c;
@@ -113,6 +114,12 @@ impl Solver for GuideSolver {
         );
         report.set_stat("/stats/contacts", contacts as f64, Aggregate::Sum);
         report.set_stat("/stats/guides", self.alive.len() as f64, Aggregate::Last);
+        // Integration steps of guides whose sub-step was split (fast joints), this step.
+        report.set_stat(
+            "/stats/split_steps",
+            (self.splits - splits0) as f64,
+            Aggregate::Sum,
+        );
     }
 
     fn sync_display(&mut self) {
@@ -158,7 +165,7 @@ impl Solver for GuideSolver {
         for &g in &self.alive {
             for i in 0..n {
                 let l = g * n + i;
-                if !(self.chains.q[l].iter().all(|v| v.is_finite())
+                if !(self.chains.q[l].coords.iter().all(|v| v.is_finite())
                     && self.chains.qd[l].iter().all(|v| v.is_finite()))
                 {
                     return Err(format!("guide {g} joint {i}: non-finite state"));

@@ -323,10 +323,16 @@ impl Strips {
                 }
                 let scale = orientation_scale(&hair, &dir.try_normalize(1e-12).unwrap_or(hair));
                 let m = chains.m[link_of(v, n)];
-                let f = contact_force(chains.v[v] - vt, nrm, d, scale, m, p);
+                let soft = tv
+                    .iter()
+                    .fold(chains.soft[v], |a, &w| a.min(chains.soft[w]));
+                let f = contact_force(chains.v[v] - vt, nrm, d, scale, m, p) * soft;
+                let cd = damping_of(scale, m, p);
                 chains.f[v] += f;
+                chains.damp[v] += cd;
                 for k in 0..3 {
                     chains.f[tv[k]] -= f * bary[k];
+                    chains.damp[tv[k]] += cd * bary[k];
                 }
             } else {
                 let (la, lb) = (c.a as usize, c.b as usize);
@@ -351,11 +357,21 @@ impl Strips {
                 let rel = chains.v[va].lerp(&chains.v[va + 1], s)
                     - chains.v[vb].lerp(&chains.v[vb + 1], t);
                 let m = chains.m[la].min(chains.m[lb]);
-                let f = contact_force(rel, nrm, d, orientation_scale(&ta, &tb), m, p);
+                let scale = orientation_scale(&ta, &tb);
+                let soft = chains.soft[va]
+                    .min(chains.soft[va + 1])
+                    .min(chains.soft[vb])
+                    .min(chains.soft[vb + 1]);
+                let f = contact_force(rel, nrm, d, scale, m, p) * soft;
+                let cd = damping_of(scale, m, p);
                 chains.f[va] += f * (1.0 - s);
                 chains.f[va + 1] += f * s;
                 chains.f[vb] -= f * (1.0 - t);
                 chains.f[vb + 1] -= f * t;
+                chains.damp[va] += cd * (1.0 - s);
+                chains.damp[va + 1] += cd * s;
+                chains.damp[vb] += cd * (1.0 - t);
+                chains.damp[vb + 1] += cd * t;
             }
         }
         count
@@ -389,6 +405,12 @@ fn contact_force(
         .max(0.0);
     let vt = rel - nrm * vn;
     (nrm * fn_ - vt * p.contact_friction) * m
+}
+
+/// The damping coefficient of a contact's force (normal damping and tangential friction),
+/// N·s/m, for the implicit damping of [`Chains::integrate`].
+fn damping_of(scale: f64, m: f64, p: &GuideParams) -> f64 {
+    (scale * p.contact_damping + p.contact_friction) * m
 }
 
 /// The link whose end is vertex `v` (the root's own link for a root).
