@@ -591,3 +591,31 @@ fn chang_shake_links_keep_the_hairstyle() {
     assert!(get("links_broken", "links_broken_fraction") > get("links", "links_broken_fraction"));
     assert_eq!(get("no_links", "links_broken_fraction"), 0.0);
 }
+
+/// The short styles at the default guide count (about 200, with tens of strip contacts per
+/// vertex): the case where explicit contact damping overshot and the state went to NaN during
+/// settling. Shortened: 0.3 s of `shake`, every step checked as in `stable_for_10_s`.
+#[test]
+fn short_styles_at_the_default_guide_count_stay_finite_and_bounded() {
+    for style in ["short", "short_curly"] {
+        let mut s = solver(style, "shake", |_| {});
+        assert!(
+            s.alive().len() >= 150,
+            "{style}: {} guides",
+            s.alive().len()
+        );
+        let mut r = s.new_report();
+        let bound = 0.5 * s.params().total_mass * 100.0;
+        let steps = (0.3 / s.dt()).round() as usize;
+        for k in 0..steps {
+            s.step(&mut r);
+            s.validate()
+                .unwrap_or_else(|e| panic!("{style} step {k}: {e}"));
+            let ke = r.counters.kinetic_energy;
+            assert!(
+                ke.is_finite() && ke < bound,
+                "{style} step {k}: {ke} J (bound {bound} J)"
+            );
+        }
+    }
+}
