@@ -29,10 +29,6 @@ use nalgebra::{
     Matrix2, Matrix3, Matrix6, Matrix6x2, Quaternion, UnitQuaternion, Vector2, Vector3, Vector6,
 };
 
-/// The inverse of the fraction of its mass a vertex moves with under a force (see
-/// [`Chains::soft`]).
-pub const DAMP_MASS: f64 = 1.0;
-
 /// The motion of the body a chain's root is fixed to (the head), in spatial coordinates.
 #[derive(Debug, Clone, Copy)]
 pub struct Base {
@@ -84,12 +80,11 @@ pub struct Chains {
     /// Per vertex: the sum of the damping coefficients of the forces in `f`, N·s/m (air drag,
     /// link damping, contact damping and friction, each by the vertex's share).
     pub damp: Vec<f64>,
-    /// Per vertex: the factor `1 / (1 + h C / m')` of backward Euler on the damping `C` of the
-    /// vertex's forces (`m Δv = h (f − C Δv)`), from the previous sub-step's `damp`, with `m'`
-    /// half the vertex's mass (a vertex of a chain moves as if lighter: its parents give way).
-    /// Links and contacts scale their whole force by the smallest factor of their vertices,
-    /// so action and reaction stay equal. Explicit, the damping of the tens of contacts of a
-    /// vertex in dense short hair overshoots and feeds a whip.
+    /// Per vertex: the factor `1 / (1 + h C / m)` of backward Euler on the damping `C` of the
+    /// vertex's forces (`m Δv = h (f − C Δv)`, `m` the mass of the vertex's link), from the
+    /// previous sub-step's `damp`. Links and contacts scale their whole force by the smallest
+    /// factor of their vertices, so action and reaction stay equal. Explicit, the damping of
+    /// the tens of contacts of a vertex in dense short hair overshoots and feeds a whip.
     pub soft: Vec<f64>,
     /// Largest joint rate reached by [`Chains::integrate`] since the last reset, rad/s (a
     /// diagnostic: nothing limits the rates).

@@ -421,8 +421,7 @@ impl GuideSolver {
                 let wind =
                     crate::solver::awt::dynamics::wind_at(&self.params, &self.chains.x[v], t);
                 let c = drag * self.chains.m[l];
-                let soft = 1.0
-                    / (1.0 + h * chain::DAMP_MASS * (self.chains.damp[v] + c) / self.chains.m[l]);
+                let soft = 1.0 / (1.0 + h * (self.chains.damp[v] + c) / self.chains.m[l]);
                 self.chains.soft[v] = soft;
                 self.chains.f[v] = (wind - self.chains.v[v]) * (c * soft);
                 self.chains.damp[v] = c;
