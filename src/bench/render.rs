@@ -22,8 +22,8 @@ pub struct RenderRow {
     pub height: u32,
     pub fps_1_thread: f64,
     pub fps_2_threads: f64,
-    /// Milliseconds per frame on 1 thread: shadow maps, shading (the projection; the
-    /// on-demand Kajiya-Kay shading counts under rasterising), rasterising, resolve.
+    /// Milliseconds per frame on 1 thread: shadow maps, shading (projecting and shading
+    /// every strand point), rasterising, resolve.
     pub stage_ms_1_thread: [f64; 4],
 }
 
@@ -75,7 +75,7 @@ fn row(
 /// Prints the rows.
 pub fn print_render(rows: &[RenderRow]) {
     println!();
-    println!("renderer at 640x480 (fps; stages in ms per frame on 1 thread: shadow maps, projection, rasterising with on-demand shading, resolve):");
+    println!("renderer at 640x480 (fps; stages in ms per frame on 1 thread: shadow maps, projection and shading, rasterising, resolve):");
     for r in rows {
         println!(
             "{:<12} {:>6} strands {:>7} segments  {:>6.1} fps 1 thread  {:>6.1} fps 2 threads  [{:.1}, {:.1}, {:.1}, {:.1}]",

@@ -4,11 +4,10 @@
 //! A frame goes through four stages:
 //!
 //! 1. **Shadow maps** ([`shadow`]): 16 opacity maps perpendicular to the light.
-//! 2. **Projection**: every strand point is projected to the screen. Its Kajiya-Kay colour
-//!    under the maps' transmittance ([`shading`]) is computed on demand, the first time a
-//!    segment at it is drawn ([`lazy_shade`]); Zhang and Wünsche shade per vertex and let the
-//!    rasteriser interpolate colours (§6.1), and so does this renderer, for the vertices that
-//!    show.
+//! 2. **Projection and shading**: every strand point is projected to the screen and gets its
+//!    Kajiya-Kay colour under the maps' transmittance ([`shading`], [`point_colors`]); Zhang
+//!    and Wünsche shade per vertex and let the rasteriser interpolate colours (§6.1), and so
+//!    does this renderer.
 //! 3. **Rasterising** ([`raster`]): segments sorted by depth once, binned into 32×32-pixel
 //!    tiles; each tile ray casts the body ([`body`]) then blends its segments front to back on
 //!    a supersampled grid.
@@ -22,7 +21,7 @@
 
 pub mod body;
 pub mod camera;
-mod lazy_shade;
+mod point_colors;
 mod pool;
 pub mod raster;
 pub mod resolve;
@@ -32,7 +31,7 @@ pub mod shadow;
 mod tile;
 
 use std::path::Path;
-use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
+use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Mutex;
 use std::time::{Duration, Instant};
 
@@ -83,8 +82,7 @@ impl Image {
 pub struct StageTimes {
     /// Building the 16 opacity shadow maps.
     pub shadow_maps: Duration,
-    /// Projecting every strand point (the shading itself is done on demand in the tile pass,
-    /// and counted under `rasterising`).
+    /// Projecting and shading every strand point.
     pub shading: Duration,
     /// Sorting and binning segments, then the tile pass's body casting and blending.
     pub rasterising: Duration,
@@ -121,6 +119,7 @@ struct Worker {
     buf: TileBuf,
     sorted: Vec<raster::SegRec>,
     tmp: Vec<raster::SegRec>,
+    keys: Vec<u16>,
     raster_ns: u64,
     resolve_ns: u64,
 }
@@ -134,8 +133,8 @@ pub struct Renderer {
     pool: pool::Pool,
     maps: ShadowMaps,
     verts: Vec<ScreenVertex>,
-    /// Per strand point, its shading state or colour ([`lazy_shade`]).
-    shade_words: Vec<AtomicU64>,
+    /// Per strand point, its packed colour ([`point_colors`]).
+    colors: Vec<u32>,
     bins: Bins,
     prims: Vec<body::Prim>,
     workers: Vec<Mutex<Worker>>,
@@ -185,6 +184,7 @@ impl Renderer {
                     buf: TileBuf::default(),
                     sorted: Vec::new(),
                     tmp: Vec::new(),
+                    keys: Vec::new(),
                     raster_ns: 0,
                     resolve_ns: 0,
                 })
@@ -201,7 +201,7 @@ impl Renderer {
             grid,
             pool,
             verts: Vec::new(),
-            shade_words: Vec::new(),
+            colors: Vec::new(),
             bins: Bins::default(),
             prims: Vec::new(),
             workers,
@@ -251,7 +251,7 @@ impl Renderer {
         self.maps
             .build_with(&strands.points, &strands.offsets, light, Some(&self.pool));
         let t1 = Instant::now();
-        self.project(strands, &view);
+        self.project(strands, &view, light);
         let t2 = Instant::now();
 
         let half = 0.5 * strand_width * ss as f32;
@@ -263,7 +263,7 @@ impl Renderer {
         );
         body::prims(input.body, &view, ws, hs, &mut self.prims);
         let t3 = Instant::now();
-        self.tile_pass(&view, light, half, &strands.points);
+        self.tile_pass(&view, light, half);
         let t4 = Instant::now();
         self.finish(out);
         let t5 = Instant::now();
@@ -288,19 +288,38 @@ impl Renderer {
         };
     }
 
-    /// Projects every strand point, and marks it unshaded with its strand and ends (the
-    /// shading itself waits for the tile pass, [`lazy_shade`]).
-    fn project(&mut self, strands: &StrandBuf, view: &View) {
+    /// The hair's Kajiya-Kay shader for light direction `light`.
+    fn hair_shader(&self, light: [f32; 3]) -> HairShader {
+        let p = &self.params;
+        HairShader {
+            color: srgb3_to_linear(p.hair_color),
+            diffuse: p.diffuse,
+            specular: p.specular,
+            exponent: p.specular_exponent,
+            ambient: p.ambient,
+            light,
+        }
+    }
+
+    /// Projects every strand point and shades it (the maps are built).
+    fn project(&mut self, strands: &StrandBuf, view: &View, light: [f32; 3]) {
         let n = strands.points.len();
-        // Every vertex and word is written below: resized, not cleared.
+        let shade = point_colors::PointShader {
+            maps: &self.maps,
+            eye: view.eye,
+            shader: self.hair_shader(light),
+            strand_colors: &self.strand_colors,
+            kappa: self.params.kappa,
+        };
+        // Every vertex and colour is written below: resized, not cleared.
         self.verts.resize(n, ScreenVertex::default());
-        self.shade_words.resize_with(n, || AtomicU64::new(0));
+        self.colors.resize(n, 0);
         let ns = strands.len();
         // Split the points at strand boundaries into CHUNKS slices, one lock each.
-        let (mut rest_v, mut rest_w): (&mut [ScreenVertex], &mut [AtomicU64]) =
-            (&mut self.verts, &mut self.shade_words);
+        let (mut rest_v, mut rest_c): (&mut [ScreenVertex], &mut [u32]) =
+            (&mut self.verts, &mut self.colors);
         let mut taken = 0usize;
-        type Part<'a> = (usize, usize, &'a mut [ScreenVertex], &'a mut [AtomicU64]);
+        type Part<'a> = (usize, usize, &'a mut [ScreenVertex], &'a mut [u32]);
         let parts: [Mutex<Part>; CHUNKS] = std::array::from_fn(|c| {
             let s0 = c * ns / CHUNKS;
             let s1 = (c + 1) * ns / CHUNKS;
@@ -310,14 +329,14 @@ impl Renderer {
                 strands.offsets[s1] as usize
             };
             let (mine_v, tail_v) = std::mem::take(&mut rest_v).split_at_mut(end - taken);
-            let (mine_w, tail_w) = std::mem::take(&mut rest_w).split_at_mut(end - taken);
-            (rest_v, rest_w) = (tail_v, tail_w);
+            let (mine_c, tail_c) = std::mem::take(&mut rest_c).split_at_mut(end - taken);
+            (rest_v, rest_c) = (tail_v, tail_c);
             taken = end;
-            Mutex::new((s0, s1, mine_v, mine_w))
+            Mutex::new((s0, s1, mine_v, mine_c))
         });
         let job = |c: usize| {
             let mut g = parts[c].lock().unwrap_or_else(|e| e.into_inner());
-            let (s0, s1, ref mut out, ref mut words) = *g;
+            let (s0, s1, ref mut out, ref mut colors) = *g;
             let base = if ns == 0 {
                 0
             } else {
@@ -325,16 +344,16 @@ impl Renderer {
             };
             for s in s0..s1 {
                 let (a, b) = (strands.offsets[s] as usize, strands.offsets[s + 1] as usize);
-                for (k, &pt) in strands.points[a..b].iter().enumerate() {
+                let pts = &strands.points[a..b];
+                for (o, &pt) in out[a - base..b - base].iter_mut().zip(pts) {
                     let sp = view.project(pt);
-                    out[a + k - base] = ScreenVertex {
+                    *o = ScreenVertex {
                         x: sp[0],
                         y: sp[1],
                         z: sp[2],
                     };
-                    *words[a + k - base].get_mut() =
-                        lazy_shade::unshaded(s, k == 0, a + k + 1 == b);
                 }
+                shade.strand(s, pts, a, &mut colors[a - base..b - base]);
             }
         };
         self.pool.for_each(CHUNKS, &job);
@@ -344,43 +363,22 @@ impl Renderer {
     /// the pool's threads.
     fn bin(&mut self, offsets: &[u32], reach: f32) {
         let ns = offsets.len().saturating_sub(1);
-        let (verts, grid, halves) = (&self.verts, &self.grid, &self.bins.halves);
+        let (verts, colors, grid, halves) =
+            (&self.verts, &self.colors, &self.grid, &self.bins.halves);
         let count = |h: usize| {
             let mut b = halves[h].lock().unwrap_or_else(|e| e.into_inner());
             b.count(verts, offsets, h * ns / 2..(h + 1) * ns / 2, grid, reach);
         };
         self.pool.for_each(2, &count);
-        let (mut zlo, mut zhi) = (f32::INFINITY, f32::NEG_INFINITY);
-        for h in halves {
-            let (a, b) = h.lock().unwrap_or_else(|e| e.into_inner()).depth_range();
-            (zlo, zhi) = (zlo.min(a), zhi.max(b));
-        }
         let fill = |h: usize| {
             let mut b = halves[h].lock().unwrap_or_else(|e| e.into_inner());
-            b.fill(verts, grid, zlo, zhi);
+            b.fill(verts, colors, grid);
         };
         self.pool.for_each(2, &fill);
     }
 
-    fn tile_pass(&mut self, view: &View, light: [f32; 3], half: f32, points: &[[f32; 3]]) {
+    fn tile_pass(&mut self, view: &View, light: [f32; 3], half: f32) {
         let p = &self.params;
-        let shade = lazy_shade::LazyShade {
-            points,
-            maps: &self.maps,
-            view,
-            shader: HairShader {
-                color: srgb3_to_linear(p.hair_color),
-                diffuse: p.diffuse,
-                specular: p.specular,
-                exponent: p.specular_exponent,
-                ambient: p.ambient,
-                light,
-            },
-            strand_colors: &self.strand_colors,
-            kappa: p.kappa,
-            words: &self.shade_words,
-        };
-        let color = |v: usize| shade.color(v);
         let resolve = resolve::Resolve {
             view,
             prims: &self.prims,
@@ -402,6 +400,10 @@ impl Renderer {
             &*h0.get_mut().unwrap_or_else(|e| e.into_inner()),
             &*h1.get_mut().unwrap_or_else(|e| e.into_inner()),
         ];
+        let key = {
+            let ((lo0, hi0), (lo1, hi1)) = (halves[0].depth_range(), halves[1].depth_range());
+            raster::DepthKey::new(lo0.min(lo1), hi0.max(hi1))
+        };
         let (workers, tiles) = (&self.workers, &self.tiles);
         let job = |k: usize| {
             let mut w = workers[k].lock().unwrap_or_else(|e| e.into_inner());
@@ -419,11 +421,13 @@ impl Renderer {
                 let n_segs = raster::sort_tile(
                     halves[0].tile(t),
                     halves[1].tile(t),
+                    key,
                     &mut w.sorted,
                     &mut w.tmp,
+                    &mut w.keys,
                 );
                 for s in &w.sorted[..n_segs] {
-                    w.buf.segment(s, half, alpha, &color);
+                    w.buf.segment(s, half, alpha);
                     if w.buf.alive == 0 {
                         break;
                     }

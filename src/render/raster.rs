@@ -19,22 +19,21 @@ pub(crate) struct ScreenVertex {
     pub z: f32,
 }
 
-/// A segment as binned: its two end points, copied so that a tile reads its segments from
-/// one contiguous run of memory, and the index of its first point (its colours are shaded
-/// only if it is drawn, [`super::lazy_shade`]). 32 bytes, so that filling and sorting the
-/// tiles move little.
+/// A segment as binned: its two end points and their colours (RGB9E5,
+/// [`super::point_colors`]), copied so that a tile reads its segments from one contiguous run
+/// of memory. 32 bytes, so that filling and sorting the tiles move little; the depth key is
+/// computed from the two depths when a tile is sorted.
 #[derive(Debug, Clone, Copy, Default)]
 pub(crate) struct SegRec {
     pub a: ScreenVertex,
     pub b: ScreenVertex,
-    /// Index of point `a` among the frame's strand points (`b` is the next one).
-    pub first: u32,
-    /// Midpoint view depth, quantised to 16 bits over the frame's depth range.
-    pub key: u32,
+    /// Packed linear colour at `a`, then at `b`.
+    pub ca: u32,
+    pub cb: u32,
 }
 
-/// The frame's visible segments binned into tiles, each with a 16-bit depth key; each tile
-/// sorts its own segments ([`sort_tile`]) so that no pass walks the whole frame in depth
+/// The frame's visible segments binned into tiles; each tile sorts its own segments by a 16-bit
+/// depth key ([`sort_tile`]) so that no pass walks the whole frame in depth
 /// order (which would miss the cache at every segment). The strands are binned in two halves
 /// (one per thread at most), each into its own lists: a tile's segments are half 0's list then
 /// half 1's, in strand order whatever the number of threads.
@@ -201,31 +200,25 @@ impl HalfBins {
         (self.zlo, self.zhi) = (zlo, zhi);
     }
 
-    /// Fills the tile lists, with depth keys quantised over [zlo, zhi].
-    pub fn fill(&mut self, verts: &[ScreenVertex], grid: &Grid, zlo: f32, zhi: f32) {
+    /// Fills the tile lists, each segment with the packed colours `colors` of its points.
+    pub fn fill(&mut self, verts: &[ScreenVertex], colors: &[u32], grid: &Grid) {
         let nt = grid.tiles();
         let total = self.start[nt] as usize;
         self.items.resize(total, SegRec::default());
         self.cursor.clear();
         self.cursor.extend_from_slice(&self.start[..nt]);
-        let scale = if zhi > zlo {
-            65535.0 / (zhi - zlo)
-        } else {
-            0.0
-        };
         for (&i, &[x0, x1, y0, y1]) in self.firsts.iter().zip(&self.rects) {
-            let (a, b) = (verts[i as usize], verts[i as usize + 1]);
-            let z = 0.5 * (a.z + b.z);
-            let key = (((z - zlo) * scale) as u32).min(65535);
+            let i = i as usize;
+            let rec = SegRec {
+                a: verts[i],
+                b: verts[i + 1],
+                ca: colors[i],
+                cb: colors[i + 1],
+            };
             for ty in y0 as usize..=y1 as usize {
                 for tx in x0 as usize..=x1 as usize {
                     let c = &mut self.cursor[ty * grid.tiles_x + tx];
-                    self.items[*c as usize] = SegRec {
-                        a,
-                        b,
-                        first: i,
-                        key,
-                    };
+                    self.items[*c as usize] = rec;
                     *c += 1;
                 }
             }
@@ -243,14 +236,40 @@ impl HalfBins {
     }
 }
 
-/// Sorts a tile's segments front to back into `out[..n]`, `n` their number (by increasing key, equal keys in strand
-/// order: two stable 8-bit counting passes, so the order is the same on every run). The
-/// records themselves move, so that the rasteriser then reads them in order from memory.
+/// Depth keys of segments: the view depth of the midpoint, quantised to 16 bits over the
+/// frame's range of midpoint depths.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct DepthKey {
+    lo: f32,
+    scale: f32,
+}
+
+impl DepthKey {
+    /// Keys over midpoint depths `lo..=hi`.
+    pub fn new(lo: f32, hi: f32) -> DepthKey {
+        let scale = if hi > lo { 65535.0 / (hi - lo) } else { 0.0 };
+        DepthKey { lo, scale }
+    }
+
+    /// The key of segment `r`.
+    #[inline(always)]
+    pub fn of(&self, r: &SegRec) -> u32 {
+        let z = 0.5 * (r.a.z + r.b.z);
+        (((z - self.lo) * self.scale) as u32).min(65535)
+    }
+}
+
+/// Sorts a tile's segments front to back into `out[..n]`, `n` their number (by increasing
+/// key, equal keys in strand order: two stable 8-bit counting passes, so the order is the
+/// same on every run). The records themselves move, so that the rasteriser then reads them in
+/// order from memory; `keys` holds the keys between the passes.
 pub(crate) fn sort_tile(
     first: &[SegRec],
     second: &[SegRec],
+    key: DepthKey,
     out: &mut Vec<SegRec>,
     tmp: &mut Vec<SegRec>,
+    keys: &mut Vec<u16>,
 ) -> usize {
     let n = first.len() + second.len();
     // Grown, never shrunk: every record up to `n` is written below, so the buffers are only
@@ -260,22 +279,37 @@ pub(crate) fn sort_tile(
             v.resize(n, SegRec::default());
         }
     }
-    let (out, tmp) = (&mut out[..n], &mut tmp[..n]);
-    let pass = |a: &[SegRec], b: &[SegRec], dst: &mut [SegRec], shift: u32| {
-        let mut counts = [0u32; 257];
-        for r in a.iter().chain(b) {
-            counts[((r.key >> shift) & 0xff) as usize + 1] += 1;
-        }
-        for d in 1..257 {
-            counts[d] += counts[d - 1];
-        }
-        for r in a.iter().chain(b) {
-            let d = ((r.key >> shift) & 0xff) as usize;
-            dst[counts[d] as usize] = *r;
-            counts[d] += 1;
-        }
-    };
-    pass(first, second, tmp, 0);
-    pass(tmp, &[], out, 8);
+    if keys.len() < n {
+        keys.resize(n, 0);
+    }
+    let (out, tmp, keys) = (&mut out[..n], &mut tmp[..n], &mut keys[..n]);
+    // Low byte: from the records, each key computed once and kept for the second pass.
+    let mut counts = [0u32; 257];
+    for r in first.iter().chain(second) {
+        counts[(key.of(r) & 0xff) as usize + 1] += 1;
+    }
+    for d in 1..257 {
+        counts[d] += counts[d - 1];
+    }
+    for r in first.iter().chain(second) {
+        let k = key.of(r);
+        let at = &mut counts[(k & 0xff) as usize];
+        tmp[*at as usize] = *r;
+        keys[*at as usize] = k as u16;
+        *at += 1;
+    }
+    // High byte.
+    let mut counts = [0u32; 257];
+    for &k in keys.iter() {
+        counts[(k >> 8) as usize + 1] += 1;
+    }
+    for d in 1..257 {
+        counts[d] += counts[d - 1];
+    }
+    for (r, &k) in tmp.iter().zip(keys.iter()) {
+        let at = &mut counts[(k >> 8) as usize];
+        out[*at as usize] = *r;
+        *at += 1;
+    }
     n
 }

@@ -285,6 +285,52 @@ impl ShadowMaps {
         top * (1.0 - fy) + bottom * fy
     }
 
+    /// [`ShadowMaps::opacity`] at four light-space points (`q[axis][lane]`) at once: the
+    /// same interpolation, without branches, for the per-point shading.
+    #[inline]
+    pub fn opacity4(&self, q: [[f32; 4]; 3], bias: f32) -> [f32; 4] {
+        use super::raster::{mn, mx};
+        let s = self.size;
+        let max = (s - 2) as f32;
+        let mut out = [0.0f32; 4];
+        for l in 0..4 {
+            // Eq. 1's two maps: f between map ⌊f⌋ and ⌊f⌋ + 1; in front of map 0, map "−1"
+            // (which holds nothing) and map 0; beyond the last map, the last map alone.
+            // (`mx`/`mn` send NaN to the bound, so the conversions below are in range.)
+            let f = mn(
+                mx((q[2][l] - self.z0) * self.inv_dz - bias, -1.0),
+                (MAPS - 1) as f32,
+            );
+            // SAFETY: f + 1 is in [0, MAPS], and x, y below in [0, size − 2].
+            let fl = (unsafe { (f + 1.0).to_int_unchecked::<i32>() } - 1).min(MAPS as i32 - 2);
+            let w1 = f - fl as f32;
+            // Map ⌊f⌋ is −1 in front of map 0: it gets no weight, and reads map 0.
+            let w0 = if fl >= 0 { 1.0 - w1 } else { 0.0 };
+            let i = (fl.max(0) as usize) & (MAPS - 1);
+            let i1 = (if fl >= 0 { i + 1 } else { 0 }) & (MAPS - 1);
+            let x = mn(mx(q[0][l] - 0.5, 0.0), max);
+            let y = mn(mx(q[1][l] - 0.5, 0.0), max);
+            let (xi, yi) = unsafe {
+                (
+                    x.to_int_unchecked::<i32>() as usize,
+                    y.to_int_unchecked::<i32>() as usize,
+                )
+            };
+            let (fx, fy) = (x - xi as f32, y - yi as f32);
+            // The 2×2 texels, each MAPS opacities.
+            let at = (yi * s + xi) * MAPS;
+            let (top, bottom) = (
+                &self.omega[at..at + 2 * MAPS],
+                &self.omega[at + s * MAPS..at + (s + 2) * MAPS],
+            );
+            let pair = |t: &[f32], k: usize| w0 * t[k + i] + w1 * t[k + i1];
+            let upper = pair(top, 0) * (1.0 - fx) + pair(top, MAPS) * fx;
+            let lower = pair(bottom, 0) * (1.0 - fx) + pair(bottom, MAPS) * fx;
+            out[l] = upper * (1.0 - fy) + lower * fy;
+        }
+        out
+    }
+
     /// The 16 opacities Ω_0..Ω_15 at texel (x, y) (for tests).
     pub fn texel(&self, x: usize, y: usize) -> &[f32] {
         let b = (y * self.size + x) * MAPS;

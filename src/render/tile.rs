@@ -22,6 +22,7 @@
 //! samples outside its cross-section get coverage 0 and so add exactly nothing.
 
 use super::camera::View;
+use super::point_colors::unpack;
 use super::raster::{ceil_pos, floor_pos, mn, mx, SegRec, OPAQUE};
 
 /// Side of a culling block, samples (a power of two).
@@ -226,16 +227,10 @@ impl TileBuf {
     }
 
     /// Blends segment `s` (global sample coordinates) behind what the tile holds: a line of
-    /// half-width `half` samples and opacity `alpha` where it covers a whole sample, coloured
-    /// by `color` of its two points (asked only if some of it may show).
+    /// half-width `half` samples and opacity `alpha` where it covers a whole sample, its
+    /// colour interpolated between its two points' colours.
     #[inline]
-    pub fn segment(
-        &mut self,
-        s: &SegRec,
-        half: f32,
-        alpha: f32,
-        color: &impl Fn(usize) -> [f32; 3],
-    ) {
+    pub fn segment(&mut self, s: &SegRec, half: f32, alpha: f32) {
         let (a, b) = (&s.a, &s.b);
         let (ox, oy) = (self.ox as f32, self.oy as f32);
         let (ax, ay, bx, by) = (a.x - ox, a.y - oy, b.x - ox, b.y - oy);
@@ -262,8 +257,7 @@ impl TileBuf {
         if hi0 < 0.0 || hi1 < 0.0 || self.hidden(lo0, hi0, lo1, hi1, zmin) {
             return;
         }
-        let i = s.first as usize;
-        let (ca, cb) = (color(i), color(i + 1));
+        let (ca, cb) = (unpack(s.ca), unpack(s.cb));
         // Walk the major axis upwards.
         let (maj0, min0, z0, c0, maj1, min1, z1, c1) = if maj_b < maj_a {
             (maj_b, min_b, b.z, cb, maj_a, min_a, a.z, ca)
