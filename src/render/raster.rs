@@ -181,8 +181,8 @@ impl HalfBins {
                 }
                 let (x0, x1) = (floor_pos(x0), floor_pos(x1).min(lastx));
                 let (y0, y1) = (floor_pos(y0), floor_pos(y1).min(lasty));
-                for ty in y0..=y1 {
-                    for tx in x0..=x1 {
+                for ty in y0..y1 + 1 {
+                    for tx in x0..x1 + 1 {
                         self.start[ty * grid.tiles_x + tx + 1] += 1;
                     }
                 }
@@ -215,8 +215,8 @@ impl HalfBins {
                 ca: colors[i],
                 cb: colors[i + 1],
             };
-            for ty in y0 as usize..=y1 as usize {
-                for tx in x0 as usize..=x1 as usize {
+            for ty in y0 as usize..y1 as usize + 1 {
+                for tx in x0 as usize..x1 as usize + 1 {
                     let c = &mut self.cursor[ty * grid.tiles_x + tx];
                     self.items[*c as usize] = rec;
                     *c += 1;
