@@ -426,12 +426,7 @@ impl Renderer {
                     &mut w.tmp,
                     &mut w.keys,
                 );
-                for s in &w.sorted[..n_segs] {
-                    w.buf.segment(s, half, alpha);
-                    if w.buf.alive == 0 {
-                        break;
-                    }
-                }
+                tile::draw_segments(&mut w.buf, &w.sorted[..n_segs], half, alpha);
                 let r1 = Instant::now();
                 let mut out = tiles[t].lock().unwrap_or_else(|e| e.into_inner());
                 resolve.tile(&w.buf, grid.ss, &mut out);

@@ -153,3 +153,34 @@ impl Drop for Pool {
         }
     }
 }
+
+/// Defines a function compiled twice, for the baseline processor and for AVX2, and choosing at
+/// run time (the check is one cached load).
+///
+/// The renderer's loops are plain scalar and `[f32; 4]` code; built for AVX2 the same code
+/// uses the three-operand VEX encoding and wider vectors, and the tile pass runs about 15 %
+/// faster. Fused multiply-add is not enabled, so both builds compute every value bit for bit
+/// alike and the image does not depend on the processor. What the body calls is compiled for
+/// AVX2 only where it is inlined, so the hot callees are `#[inline(always)]`.
+macro_rules! multiversion {
+    ($(#[$m:meta])* $vis:vis fn $name:ident($($arg:ident: $ty:ty),* $(,)?) $(-> $ret:ty)? $body:block) => {
+        $(#[$m])*
+        $vis fn $name($($arg: $ty),*) $(-> $ret)? {
+            #[inline(always)]
+            fn body($($arg: $ty),*) $(-> $ret)? $body
+            #[cfg(target_arch = "x86_64")]
+            {
+                #[target_feature(enable = "avx2")]
+                unsafe fn avx2($($arg: $ty),*) $(-> $ret)? {
+                    body($($arg),*)
+                }
+                if std::arch::is_x86_feature_detected!("avx2") {
+                    // SAFETY: the processor has AVX2, checked just above.
+                    return unsafe { avx2($($arg),*) };
+                }
+            }
+            body($($arg),*)
+        }
+    };
+}
+pub(crate) use multiversion;

@@ -93,7 +93,7 @@ fn clamp_pos(x: f32) -> f32 {
 }
 
 /// ⌊x⌋ for x ≥ 0 (negative x and NaN give 0, huge x 2²⁴), without a libm call.
-#[inline]
+#[inline(always)]
 pub(crate) fn floor_pos(x: f32) -> usize {
     // The clamped value is finite and in range, so the plain truncating conversion is exact
     // (the saturating `as` costs several instructions here, on the rasteriser's hottest
@@ -104,7 +104,7 @@ pub(crate) fn floor_pos(x: f32) -> usize {
 }
 
 /// ⌈x⌉ for x ≥ 0 (negative x and NaN give 0, huge x 2²⁴), without a libm call.
-#[inline]
+#[inline(always)]
 pub(crate) fn ceil_pos(x: f32) -> usize {
     let x = clamp_pos(x);
     // SAFETY: as in `floor_pos`.

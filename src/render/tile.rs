@@ -23,6 +23,7 @@
 
 use super::camera::View;
 use super::point_colors::unpack;
+use super::pool::multiversion;
 use super::raster::{ceil_pos, floor_pos, mn, mx, SegRec, OPAQUE};
 
 /// Side of a culling block, samples (a power of two).
@@ -129,7 +130,7 @@ impl TileBuf {
 
     /// Whether nothing at view depth `z` or beyond can show in tile-relative box
     /// [x0, x1] × [y0, y1]: every block it touches is opaque, or hidden by the body.
-    #[inline]
+    #[inline(always)]
     fn hidden(&self, x0: f32, x1: f32, y0: f32, y1: f32, z: f32) -> bool {
         let last = self.nb - 1;
         let bx0 = (floor_pos(x0) / BLOCK).min(last);
@@ -195,7 +196,7 @@ impl TileBuf {
 
     /// Whether samples j0..=j1 of column (or row) i are all in opaque or body-hidden blocks
     /// at depth `z`.
-    #[inline]
+    #[inline(always)]
     fn column_hidden(&self, at: Column, j0: usize, j1: usize, z: f32) -> bool {
         let mut far = f32::NEG_INFINITY;
         for jb in j0 / BLOCK..j1 / BLOCK + 1 {
@@ -230,7 +231,7 @@ impl TileBuf {
     /// Blends segment `s` (global sample coordinates) behind what the tile holds: a line of
     /// half-width `half` samples and opacity `alpha` where it covers a whole sample, its
     /// colour interpolated between its two points' colours.
-    #[inline]
+    #[inline(always)]
     pub fn segment(&mut self, s: &SegRec, half: f32, alpha: f32) {
         let (a, b) = (&s.a, &s.b);
         let (ox, oy) = (self.ox as f32, self.oy as f32);
@@ -312,11 +313,7 @@ impl TileBuf {
             let z = z0 + t * dz;
             let (y_lo, y_hi) = (c - h, c + h);
             let j0 = floor_pos(y_lo);
-            let j1 = ceil_pos(y_hi).min(n);
             let col = Column::new(x_major, col_i, self.nb);
-            if j1 <= j0 || self.column_hidden(col, j0, j1 - 1, z) {
-                continue;
-            }
             let rgb = Px([
                 c0[0] + t * dc[0],
                 c0[1] + t * dc[1],
@@ -326,7 +323,9 @@ impl TileBuf {
             let w0 = alpha * cov_maj;
             if thin {
                 // A fixed window (moved inside the tile at its far edge), all four samples
-                // at once.
+                // at once. No culling test per column: its group passed one, and a sample
+                // that is opaque or behind the body refuses the blend anyway; the test would
+                // cost as much as the blend.
                 let js = j0.min(n - WINDOW);
                 self.blend_window(
                     col_i * stride_maj + js * stride_min,
@@ -338,6 +337,10 @@ impl TileBuf {
                     (y_lo, y_hi),
                     &rgb,
                 );
+                continue;
+            }
+            let j1 = ceil_pos(y_hi).min(n);
+            if j1 <= j0 || self.column_hidden(col, j0, j1 - 1, z) {
                 continue;
             }
             let mut fj = j0 as f32;
@@ -415,6 +418,18 @@ impl TileBuf {
     }
 }
 
+multiversion! {
+    /// Blends `segs` (sorted front to back) into `buf`, stopping once every sample is opaque.
+    pub(crate) fn draw_segments(buf: &mut TileBuf, segs: &[SegRec], half: f32, alpha: f32) {
+        for s in segs {
+            buf.segment(s, half, alpha);
+            if buf.alive == 0 {
+                break;
+            }
+        }
+    }
+}
+
 /// One sample: linear r, g, b accumulated front to back (premultiplied), then the
 /// transmittance; aligned so that a sample is one vector load and store.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
@@ -431,7 +446,7 @@ struct Column {
 }
 
 impl Column {
-    #[inline]
+    #[inline(always)]
     fn new(x_major: bool, i: usize, nb: usize) -> Column {
         if x_major {
             Column {
@@ -447,7 +462,7 @@ impl Column {
     }
 
     /// The block of sample `j` of the column.
-    #[inline]
+    #[inline(always)]
     fn block(self, j: usize) -> usize {
         self.base + (j / BLOCK) * self.step
     }
