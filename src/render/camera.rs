@@ -89,7 +89,7 @@ impl View {
     }
 
     /// Sample coordinates (x right, y down) and view depth of `p`.
-    #[inline]
+    #[inline(always)]
     pub fn project(&self, p: [f32; 3]) -> [f32; 3] {
         let v = sub(p, self.eye);
         let z = dot(v, self.fwd);

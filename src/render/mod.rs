@@ -342,19 +342,7 @@ impl Renderer {
             } else {
                 strands.offsets[s0] as usize
             };
-            for s in s0..s1 {
-                let (a, b) = (strands.offsets[s] as usize, strands.offsets[s + 1] as usize);
-                let pts = &strands.points[a..b];
-                for (o, &pt) in out[a - base..b - base].iter_mut().zip(pts) {
-                    let sp = view.project(pt);
-                    *o = ScreenVertex {
-                        x: sp[0],
-                        y: sp[1],
-                        z: sp[2],
-                    };
-                }
-                shade.strand(s, pts, a, &mut colors[a - base..b - base]);
-            }
+            project_strands(view, &shade, strands, s0..s1, base, out, colors);
         };
         self.pool.for_each(CHUNKS, &job);
     }
@@ -494,6 +482,34 @@ impl Renderer {
             resolve::postfilter_rows((linear, w, h), y0..y1, s, lut, band, &mut row);
         };
         self.pool.for_each(CHUNKS, &job);
+    }
+}
+
+pool::multiversion! {
+    /// Projects and shades strands `range` into `out` and `colors`, which start at point
+    /// `base`.
+    fn project_strands(
+        view: &View,
+        shade: &point_colors::PointShader,
+        strands: &StrandBuf,
+        range: std::ops::Range<usize>,
+        base: usize,
+        out: &mut [ScreenVertex],
+        colors: &mut [u32],
+    ) {
+        for s in range {
+            let (a, b) = (strands.offsets[s] as usize, strands.offsets[s + 1] as usize);
+            let pts = &strands.points[a..b];
+            for (o, &pt) in out[a - base..b - base].iter_mut().zip(pts) {
+                let sp = view.project(pt);
+                *o = ScreenVertex {
+                    x: sp[0],
+                    y: sp[1],
+                    z: sp[2],
+                };
+            }
+            shade.strand(s, pts, a, &mut colors[a - base..b - base]);
+        }
     }
 }
 

@@ -122,6 +122,7 @@ impl PointShader<'_> {
     /// into `out` (one word per point). The tangent at a point is the direction from its
     /// previous to its next point (one-sided at the ends). Four points at a time; a last
     /// group of fewer repeats the strand's last point in the spare lanes and drops them.
+    #[inline(always)]
     pub fn strand(&self, s: usize, pts: &[[f32; 3]], first: usize, out: &mut [u32]) {
         let Some(last) = pts.len().checked_sub(1) else {
             return;
@@ -154,7 +155,7 @@ impl PointShader<'_> {
 
     /// Kajiya-Kay ([`HairShader::shade`], lane by lane) at points `pt` with tangent
     /// directions `d` (not unit) and opacities `omega` in front of them, packed.
-    #[inline]
+    #[inline(always)]
     fn shade4(&self, shader: &HairShader, pt: [V4; 3], d: [V4; 3], omega: V4) -> [u32; 4] {
         use super::shading::{exp, exp2, log2};
         // Unit tangent, or +z for a zero-length one (as `normalize`).

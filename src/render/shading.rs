@@ -37,7 +37,7 @@ pub fn kajiya_kay_specular(t_dot_l: f32, t_dot_e: f32, p: f32) -> f32 {
 /// log₂ x for finite x > 0 (the atanh series of Cephes' `logf`, relative error about 10⁻⁷;
 /// x below the smallest normal float, and NaN, give −126). Written out so that a strand
 /// point's shading has no libm call and no branch, and the same result on every platform.
-#[inline]
+#[inline(always)]
 pub fn log2(x: f32) -> f32 {
     let x = if x > f32::MIN_POSITIVE {
         x
@@ -59,7 +59,7 @@ pub fn log2(x: f32) -> f32 {
 
 /// 2ˣ (Cephes' `exp2f` polynomial on [−½, ½], relative error about 2·10⁻⁷); x below −126
 /// gives 0, above 127 (and NaN) 2¹²⁷. No branch.
-#[inline]
+#[inline(always)]
 pub fn exp2(x: f32) -> f32 {
     // (NaN fails `x < 127` and becomes 127.)
     let xc = if x < 127.0 { x } else { 127.0 };
@@ -84,7 +84,7 @@ pub fn exp2(x: f32) -> f32 {
 }
 
 /// e^x by [`exp2`].
-#[inline]
+#[inline(always)]
 pub fn exp(x: f32) -> f32 {
     exp2(x * std::f32::consts::LOG2_E)
 }

@@ -15,6 +15,8 @@
 //! a strand then never shadows itself, and hair less than dz in front of a point shadows it
 //! only in part (fully from 2·dz on). The body, which deposits nothing, is looked up unbiased.
 
+use std::sync::Mutex;
+
 use super::camera::{cross, dot, normalize};
 
 /// Number of opacity maps (Zhang and Wünsche 2007, §6.1: sixteen, four per render target).
@@ -59,6 +61,42 @@ pub struct ShadowMaps {
 const HALVES: usize = 2;
 /// Bands of texel rows of the front-to-back sum.
 const SUM_BANDS: usize = 8;
+/// Chunks of points for the light-space transform.
+const FRAME_CHUNKS: usize = 8;
+
+super::pool::multiversion! {
+    /// Writes into `out` the points `points` (as many as `out` holds) in the frame `axes`,
+    /// widening `lo`/`hi` to their bounds.
+    fn to_light_frame(
+        points: &[[f32; 3]],
+        axes: [[f32; 3]; 3],
+        out: &mut [[f32; 3]],
+        lo: &mut [f32; 3],
+        hi: &mut [f32; 3],
+    ) {
+        use super::raster::{mn, mx};
+        for (q, p) in out.iter_mut().zip(points) {
+            *q = axes.map(|a| dot(*p, a));
+            // The point first: a NaN point leaves the bounds as they were.
+            for a in 0..3 {
+                lo[a] = mn(q[a], lo[a]);
+                hi[a] = mx(q[a], hi[a]);
+            }
+        }
+    }
+}
+
+super::pool::multiversion! {
+    /// Deposits every segment of strands `range` (points in `maps.lp`) into `m`.
+    fn deposit_strands(maps: &ShadowMaps, m: &mut [f32], offsets: &[u32], range: std::ops::Range<usize>) {
+        for s in range {
+            let (a, b) = (offsets[s] as usize, offsets[s + 1] as usize);
+            for i in a..b.saturating_sub(1) {
+                maps.deposit(m, maps.lp[i], maps.lp[i + 1]);
+            }
+        }
+    }
+}
 
 impl ShadowMaps {
     /// Empty maps of `size`² texels each.
@@ -101,19 +139,14 @@ impl ShadowMaps {
         to_light: [f32; 3],
         pool: Option<&super::pool::Pool>,
     ) {
-        self.frame(points, to_light);
+        self.frame(points, to_light, pool);
         let ns = offsets.len().saturating_sub(1);
         let me = &*self;
         let job = |h: usize| {
             let mut m = me.partial[h].lock().unwrap_or_else(|e| e.into_inner());
             m.clear();
             m.resize(me.size * me.size * MAPS, 0.0);
-            for s in h * ns / HALVES..(h + 1) * ns / HALVES {
-                let (a, b) = (offsets[s] as usize, offsets[s + 1] as usize);
-                for i in a..b.saturating_sub(1) {
-                    me.deposit(&mut m, me.lp[i], me.lp[i + 1]);
-                }
-            }
+            deposit_strands(me, &mut m, offsets, h * ns / HALVES..(h + 1) * ns / HALVES);
         };
         match pool {
             Some(p) => p.for_each(HALVES, &job),
@@ -166,8 +199,9 @@ impl ShadowMaps {
         }
     }
 
-    /// Sets up the light frame around the hair and the light-space points.
-    fn frame(&mut self, points: &[[f32; 3]], to_light: [f32; 3]) {
+    /// Sets up the light frame around the hair and the light-space points (in chunks on
+    /// `pool`, if any: the bounds of each chunk, then the points scaled to texels).
+    fn frame(&mut self, points: &[[f32; 3]], to_light: [f32; 3], pool: Option<&super::pool::Pool>) {
         let d = normalize([-to_light[0], -to_light[1], -to_light[2]]);
         let helper = if d[1].abs() < 0.9 {
             [0.0, 1.0, 0.0]
@@ -177,38 +211,64 @@ impl ShadowMaps {
         let u = normalize(cross(helper, d));
         let v = cross(d, u);
         (self.ax_u, self.ax_v, self.ax_d) = (u, v, d);
-        self.lp.clear();
+        // Every point is written below: resized, not cleared.
+        self.lp.resize(points.len(), [0.0; 3]);
+        let n = points.len();
+        let mut rest: &mut [[f32; 3]] = &mut self.lp;
+        type Part<'a> = (usize, &'a mut [[f32; 3]], [f32; 3], [f32; 3]);
+        let parts: [Mutex<Part>; FRAME_CHUNKS] = std::array::from_fn(|c| {
+            let (p0, p1) = (c * n / FRAME_CHUNKS, (c + 1) * n / FRAME_CHUNKS);
+            let (mine, tail) = std::mem::take(&mut rest).split_at_mut(p1 - p0);
+            rest = tail;
+            Mutex::new((p0, mine, [f32::INFINITY; 3], [f32::NEG_INFINITY; 3]))
+        });
+        let project = |c: usize| {
+            let mut g = parts[c].lock().unwrap_or_else(|e| e.into_inner());
+            let (p0, ref mut out, ref mut lo, ref mut hi) = *g;
+            to_light_frame(&points[p0..], [u, v, d], out, lo, hi);
+        };
+        match pool {
+            Some(p) => p.for_each(FRAME_CHUNKS, &project),
+            None => (0..FRAME_CHUNKS).for_each(project),
+        }
         let (mut lo, mut hi) = ([f32::INFINITY; 3], [f32::NEG_INFINITY; 3]);
-        for p in points {
-            let q = [dot(*p, u), dot(*p, v), dot(*p, d)];
+        for part in &parts {
+            let g = part.lock().unwrap_or_else(|e| e.into_inner());
             for a in 0..3 {
-                lo[a] = lo[a].min(q[a]);
-                hi[a] = hi[a].max(q[a]);
+                lo[a] = lo[a].min(g.2[a]);
+                hi[a] = hi[a].max(g.3[a]);
             }
-            self.lp.push(q);
         }
         if points.is_empty() {
             (lo, hi) = ([0.0; 3], [1.0; 3]);
         }
-        let n = self.size as f32;
+        let size = self.size as f32;
         let extent = (hi[0] - lo[0]).max(hi[1] - lo[1]).max(1e-4);
         // One texel of margin on each side, so that bilinear splats stay inside.
-        self.inv_texel = (n - 3.0) / extent;
-        self.u0 = lo[0] - 1.0 / self.inv_texel;
-        self.v0 = lo[1] - 1.0 / self.inv_texel;
+        let inv_texel = (size - 3.0) / extent;
+        let (u0, v0) = (lo[0] - 1.0 / inv_texel, lo[1] - 1.0 / inv_texel);
+        let to_texels = |c: usize| {
+            let mut g = parts[c].lock().unwrap_or_else(|e| e.into_inner());
+            for q in g.1.iter_mut() {
+                q[0] = (q[0] - u0) * inv_texel;
+                q[1] = (q[1] - v0) * inv_texel;
+            }
+        };
+        match pool {
+            Some(p) => p.for_each(FRAME_CHUNKS, &to_texels),
+            None => (0..FRAME_CHUNKS).for_each(to_texels),
+        }
+        (self.inv_texel, self.u0, self.v0) = (inv_texel, u0, v0);
         self.z0 = lo[2];
         self.dz = ((hi[2] - lo[2]) / (MAPS - 1) as f32).max(1e-5);
         self.inv_dz = 1.0 / self.dz;
-        let (u0, v0, it) = (self.u0, self.v0, self.inv_texel);
-        for q in &mut self.lp {
-            q[0] = (q[0] - u0) * it;
-            q[1] = (q[1] - v0) * it;
-        }
     }
 
     /// Deposits segment a–b (light space) into `m`, each piece (at most two texels long) into
     /// the first map behind it.
+    #[inline(always)]
     fn deposit(&self, m: &mut [f32], a: [f32; 3], b: [f32; 3]) {
+        use super::raster::{mn, mx};
         let (du, dv) = (b[0] - a[0], b[1] - a[1]);
         let len = (du * du + dv * dv).sqrt();
         // Pieces up to two texels long: the bilinear splat spreads each over a 2×2 footprint,
@@ -223,13 +283,16 @@ impl ShadowMaps {
         let mut t = 0.5 * step;
         for _ in 0..pieces {
             // Texel centres are at integer + 0.5.
-            let x = (a[0] + du * t - 0.5).clamp(0.0, max);
-            let y = (a[1] + dv * t - 0.5).clamp(0.0, max);
+            // (`mx`/`mn` send NaN to 0, so the conversions below are in range.)
+            let x = mn(mx(a[0] + du * t - 0.5, 0.0), max);
+            let y = mn(mx(a[1] + dv * t - 0.5, 0.0), max);
             let z = a[2] + (b[2] - a[2]) * t;
             t += step;
-            let map = super::raster::ceil_pos(((z - self.z0) * inv_dz).min(top));
-            let (xi, yi) = (x as i32 as usize, y as i32 as usize);
-            let (fx, fy) = (x - xi as i32 as f32, y - yi as i32 as f32);
+            let map = super::raster::ceil_pos(mn((z - self.z0) * inv_dz, top));
+            // SAFETY: x and y are in [0, size − 2].
+            let (xi, yi) = unsafe { (x.to_int_unchecked::<i32>(), y.to_int_unchecked::<i32>()) };
+            let (fx, fy) = (x - xi as f32, y - yi as f32);
+            let (xi, yi) = (xi as usize, yi as usize);
             // Deposits are map-major (one s² plane per map): the pieces of a strand mostly
             // fall in one map, so successive splats touch nearby memory (texel-major, each
             // splat touched four cache lines of a 1 MB array).
@@ -252,7 +315,7 @@ impl ShadowMaps {
     }
 
     /// Light-space position of strand point `i` of the last build.
-    #[inline]
+    #[inline(always)]
     pub fn point(&self, i: usize) -> [f32; 3] {
         self.lp[i]
     }
@@ -287,7 +350,7 @@ impl ShadowMaps {
 
     /// [`ShadowMaps::opacity`] at four light-space points (`q[axis][lane]`) at once: the
     /// same interpolation, without branches, for the per-point shading.
-    #[inline]
+    #[inline(always)]
     pub fn opacity4(&self, q: [[f32; 4]; 3], bias: f32) -> [f32; 4] {
         use super::raster::{mn, mx};
         let s = self.size;
