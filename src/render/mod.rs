@@ -380,7 +380,6 @@ impl Renderer {
         };
         let alpha = p.strand_alpha;
         let grid = self.grid;
-        let n = grid.tile_samples();
         let next = AtomicUsize::new(0);
         let prims = &self.prims;
         let [h0, h1] = &mut self.bins.halves;
@@ -393,6 +392,16 @@ impl Renderer {
             raster::DepthKey::new(lo0.min(lo1), hi0.max(hi1))
         };
         let (workers, tiles) = (&self.workers, &self.tiles);
+        let setup = TileSetup {
+            grid,
+            view,
+            prims,
+            halves,
+            key,
+            half,
+            alpha,
+            resolve: &resolve,
+        };
         let job = |k: usize| {
             let mut w = workers[k].lock().unwrap_or_else(|e| e.into_inner());
             let w = &mut *w;
@@ -401,25 +410,10 @@ impl Renderer {
                 if t >= grid.tiles() {
                     break;
                 }
-                let r0 = Instant::now();
-                let (ox, oy) = grid.origin(t);
-                w.buf.reset(n, ox, oy);
-                w.buf.cast_body(view, prims);
-                w.buf.close_blocks();
-                let n_segs = raster::sort_tile(
-                    halves[0].tile(t),
-                    halves[1].tile(t),
-                    key,
-                    &mut w.sorted,
-                    &mut w.tmp,
-                    &mut w.keys,
-                );
-                tile::draw_segments(&mut w.buf, &w.sorted[..n_segs], half, alpha);
-                let r1 = Instant::now();
                 let mut out = tiles[t].lock().unwrap_or_else(|e| e.into_inner());
-                resolve.tile(&w.buf, grid.ss, &mut out);
-                w.raster_ns += (r1 - r0).as_nanos() as u64;
-                w.resolve_ns += r1.elapsed().as_nanos() as u64;
+                let (rn, sn) = render_tile(w, t, &setup, &mut out);
+                w.raster_ns += rn;
+                w.resolve_ns += sn;
             }
         };
         self.pool.run(&job);
@@ -482,6 +476,42 @@ impl Renderer {
             resolve::postfilter_rows((linear, w, h), y0..y1, s, lut, band, &mut row);
         };
         self.pool.for_each(CHUNKS, &job);
+    }
+}
+
+/// What every tile of a frame shares.
+struct TileSetup<'a> {
+    grid: Grid,
+    view: &'a View,
+    prims: &'a [body::Prim],
+    halves: [&'a raster::HalfBins; 2],
+    key: raster::DepthKey,
+    half: f32,
+    alpha: f32,
+    resolve: &'a resolve::Resolve<'a>,
+}
+
+pool::multiversion! {
+    /// Renders tile `t` with worker `w`'s buffers into `out` (its resolved linear pixels);
+    /// returns the nanoseconds spent rasterising and resolving.
+    fn render_tile(w: &mut Worker, t: usize, f: &TileSetup, out: &mut [f32]) -> (u64, u64) {
+        let r0 = Instant::now();
+        let (ox, oy) = f.grid.origin(t);
+        w.buf.reset(f.grid.tile_samples(), ox, oy);
+        w.buf.cast_body(f.view, f.prims);
+        w.buf.close_blocks();
+        let n_segs = raster::sort_tile(
+            f.halves[0].tile(t),
+            f.halves[1].tile(t),
+            f.key,
+            &mut w.sorted,
+            &mut w.tmp,
+            &mut w.keys,
+        );
+        tile::draw_segments(&mut w.buf, &w.sorted[..n_segs], f.half, f.alpha);
+        let r1 = Instant::now();
+        f.resolve.tile(&w.buf, f.grid.ss, out);
+        ((r1 - r0).as_nanos() as u64, r1.elapsed().as_nanos() as u64)
     }
 }
 

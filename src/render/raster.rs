@@ -263,6 +263,7 @@ impl DepthKey {
 /// key, equal keys in strand order: two stable 8-bit counting passes, so the order is the
 /// same on every run). The records themselves move, so that the rasteriser then reads them in
 /// order from memory; `keys` holds the keys between the passes.
+#[inline(always)]
 pub(crate) fn sort_tile(
     first: &[SegRec],
     second: &[SegRec],

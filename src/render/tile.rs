@@ -67,6 +67,7 @@ pub(crate) struct TileBuf {
 
 impl TileBuf {
     /// Clears the buffer for a tile of `n`² samples at `(ox, oy)`.
+    #[inline(always)]
     pub fn reset(&mut self, n: usize, ox: i32, oy: i32) {
         self.n = n;
         self.ox = ox;
@@ -97,6 +98,7 @@ impl TileBuf {
     }
 
     /// Sets each block's farthest body depth, once the body is cast.
+    #[inline(always)]
     pub fn close_blocks(&mut self) {
         let n = self.n;
         if !self.body_seen {
@@ -161,6 +163,7 @@ impl TileBuf {
     }
 
     /// Ray casts the body primitives `prims` into the depth buffer.
+    #[inline(always)]
     pub fn cast_body(&mut self, view: &View, prims: &[super::body::Prim]) {
         let n = self.n;
         let (fx0, fy0) = (self.ox as f32, self.oy as f32);
