@@ -135,6 +135,10 @@ pub struct Renderer {
     verts: Vec<ScreenVertex>,
     /// Per strand point, its packed colour ([`point_colors`]).
     colors: Vec<u32>,
+    /// Per strand point, whether a binned segment uses it (1) or not (0).
+    needed: Vec<u8>,
+    /// Per tile, its body as cast before binning.
+    layers: Vec<tile::BodyLayer>,
     bins: Bins,
     prims: Vec<body::Prim>,
     workers: Vec<Mutex<Worker>>,
@@ -202,6 +206,8 @@ impl Renderer {
             pool,
             verts: Vec::new(),
             colors: Vec::new(),
+            needed: Vec::new(),
+            layers: Vec::new(),
             bins: Bins::default(),
             prims: Vec::new(),
             workers,
@@ -251,17 +257,21 @@ impl Renderer {
         self.maps
             .build_with(&strands.points, &strands.offsets, light, Some(&self.pool));
         let t1 = Instant::now();
-        self.project(strands, &view, light);
+        self.project(strands, &view);
         let t2 = Instant::now();
-
-        let half = 0.5 * strand_width * ss as f32;
-        let reach = half * 1.5 + 1.0;
-        self.bin(&strands.offsets, reach);
         let (ws, hs) = (
             (self.width as usize * ss) as f32,
             (self.height as usize * ss) as f32,
         );
         body::prims(input.body, &view, ws, hs, &mut self.prims);
+        self.cast_body(&view);
+        let half = 0.5 * strand_width * ss as f32;
+        let reach = half * 1.5 + 1.0;
+        self.count(&strands.offsets, reach, half);
+        let t2a = Instant::now();
+        self.shade(strands, &view, light);
+        let t2b = Instant::now();
+        self.fill();
         let t3 = Instant::now();
         self.tile_pass(&view, light, half);
         let t4 = Instant::now();
@@ -282,8 +292,8 @@ impl Renderer {
         };
         self.times = StageTimes {
             shadow_maps: t1 - t0,
-            shading: t2 - t1,
-            rasterising: (t3 - t2) + Duration::from_secs_f64(pass * frac),
+            shading: (t2 - t1) + (t2b - t2a),
+            rasterising: (t2a - t2) + (t3 - t2b) + Duration::from_secs_f64(pass * frac),
             resolve: Duration::from_secs_f64(pass * (1.0 - frac)) + (t5 - t4),
         };
     }
@@ -301,9 +311,23 @@ impl Renderer {
         }
     }
 
-    /// Projects every strand point and shades it (the maps are built).
-    fn project(&mut self, strands: &StrandBuf, view: &View, light: [f32; 3]) {
-        let n = strands.points.len();
+    /// Projects every strand point.
+    fn project(&mut self, strands: &StrandBuf, view: &View) {
+        // Every vertex is written below: resized, not cleared.
+        self.verts
+            .resize(strands.points.len(), ScreenVertex::default());
+        let parts = split_by_strands::<_, CHUNKS>(&mut self.verts, &strands.offsets);
+        let job = |c: usize| {
+            let mut g = parts[c].lock().unwrap_or_else(|e| e.into_inner());
+            let (first, ref mut out) = *g;
+            project_points(view, &strands.points[first..first + out.len()], out);
+        };
+        self.pool.for_each(CHUNKS, &job);
+    }
+
+    /// Shades every strand point that a binned segment uses (`needed`); the others keep a
+    /// stale colour that nothing reads.
+    fn shade(&mut self, strands: &StrandBuf, view: &View, light: [f32; 3]) {
         let shade = point_colors::PointShader {
             maps: &self.maps,
             eye: view.eye,
@@ -311,53 +335,81 @@ impl Renderer {
             strand_colors: &self.strand_colors,
             kappa: self.params.kappa,
         };
-        // Every vertex and colour is written below: resized, not cleared.
-        self.verts.resize(n, ScreenVertex::default());
-        self.colors.resize(n, 0);
+        // Written where needed, read only there: resized, not cleared.
+        self.colors.resize(strands.points.len(), 0);
+        let needed = &self.needed;
         let ns = strands.len();
-        // Split the points at strand boundaries into CHUNKS slices, one lock each.
-        let (mut rest_v, mut rest_c): (&mut [ScreenVertex], &mut [u32]) =
-            (&mut self.verts, &mut self.colors);
-        let mut taken = 0usize;
-        type Part<'a> = (usize, usize, &'a mut [ScreenVertex], &'a mut [u32]);
-        let parts: [Mutex<Part>; CHUNKS] = std::array::from_fn(|c| {
-            let s0 = c * ns / CHUNKS;
-            let s1 = (c + 1) * ns / CHUNKS;
-            let end = if ns == 0 {
-                0
-            } else {
-                strands.offsets[s1] as usize
-            };
-            let (mine_v, tail_v) = std::mem::take(&mut rest_v).split_at_mut(end - taken);
-            let (mine_c, tail_c) = std::mem::take(&mut rest_c).split_at_mut(end - taken);
-            (rest_v, rest_c) = (tail_v, tail_c);
-            taken = end;
-            Mutex::new((s0, s1, mine_v, mine_c))
-        });
+        let parts = split_by_strands::<_, CHUNKS>(&mut self.colors, &strands.offsets);
         let job = |c: usize| {
             let mut g = parts[c].lock().unwrap_or_else(|e| e.into_inner());
-            let (s0, s1, ref mut out, ref mut colors) = *g;
-            let base = if ns == 0 {
-                0
-            } else {
-                strands.offsets[s0] as usize
-            };
-            project_strands(view, &shade, strands, s0..s1, base, out, colors);
+            let (base, ref mut colors) = *g;
+            let range = c * ns / CHUNKS..(c + 1) * ns / CHUNKS;
+            shade_strands(&shade, strands, range, base, needed, colors);
         };
         self.pool.for_each(CHUNKS, &job);
     }
 
-    /// Bins the segments into tiles: the two halves of the strands counted, then filled, by
-    /// the pool's threads.
-    fn bin(&mut self, offsets: &[u32], reach: f32) {
+    /// Casts the body into every tile's [`tile::BodyLayer`], in CHUNKS runs of tiles.
+    fn cast_body(&mut self, view: &View) {
+        let (grid, prims) = (self.grid, &self.prims);
+        let nt = grid.tiles();
+        self.layers.resize_with(nt, Default::default);
+        let mut rest: &mut [tile::BodyLayer] = &mut self.layers;
+        let runs: [Mutex<(usize, &mut [tile::BodyLayer])>; CHUNKS] = std::array::from_fn(|c| {
+            let (t0, t1) = (c * nt / CHUNKS, (c + 1) * nt / CHUNKS);
+            let (mine, tail) = std::mem::take(&mut rest).split_at_mut(t1 - t0);
+            rest = tail;
+            Mutex::new((t0, mine))
+        });
+        let workers = &self.workers;
+        let next = AtomicUsize::new(0);
+        let job = |k: usize| {
+            let mut w = workers[k].lock().unwrap_or_else(|e| e.into_inner());
+            loop {
+                let c = next.fetch_add(1, Ordering::Relaxed);
+                if c >= CHUNKS {
+                    break;
+                }
+                let mut g = runs[c].lock().unwrap_or_else(|e| e.into_inner());
+                let (t0, ref mut run) = *g;
+                for (k, layer) in run.iter_mut().enumerate() {
+                    let origin = grid.origin(t0 + k);
+                    w.buf
+                        .cast_layer(grid.tile_samples(), origin, view, prims, layer);
+                }
+            }
+        };
+        self.pool.run(&job);
+    }
+
+    /// Bins the segments into tiles, leaving out of each tile those the body hides there, and
+    /// marks the points of the binned segments as `needed`: the two halves of the strands
+    /// counted, by the pool's threads.
+    fn count(&mut self, offsets: &[u32], reach: f32, half: f32) {
         let ns = offsets.len().saturating_sub(1);
-        let (verts, colors, grid, halves) =
-            (&self.verts, &self.colors, &self.grid, &self.bins.halves);
+        let n = offsets.last().map_or(0, |&e| e as usize);
+        self.needed.clear();
+        self.needed.resize(n, 0);
+        let parts = split_by_strands::<_, 2>(&mut self.needed, offsets);
+        let (verts, grid, halves) = (&self.verts, &self.grid, &self.bins.halves);
+        let cull = tile::BodyCull {
+            layers: &self.layers,
+            half,
+        };
         let count = |h: usize| {
             let mut b = halves[h].lock().unwrap_or_else(|e| e.into_inner());
-            b.count(verts, offsets, h * ns / 2..(h + 1) * ns / 2, grid, reach);
+            let mut g = parts[h].lock().unwrap_or_else(|e| e.into_inner());
+            let (base, ref mut needed) = *g;
+            let strands = h * ns / 2..(h + 1) * ns / 2;
+            b.count(verts, offsets, strands, grid, reach, &cull, (base, needed));
         };
         self.pool.for_each(2, &count);
+    }
+
+    /// Fills the tile lists counted by [`Renderer::count`], with the points' colours.
+    fn fill(&mut self) {
+        let (verts, colors, grid, halves) =
+            (&self.verts, &self.colors, &self.grid, &self.bins.halves);
         let fill = |h: usize| {
             let mut b = halves[h].lock().unwrap_or_else(|e| e.into_inner());
             b.fill(verts, colors, grid);
@@ -381,7 +433,6 @@ impl Renderer {
         let alpha = p.strand_alpha;
         let grid = self.grid;
         let next = AtomicUsize::new(0);
-        let prims = &self.prims;
         let [h0, h1] = &mut self.bins.halves;
         let halves = [
             &*h0.get_mut().unwrap_or_else(|e| e.into_inner()),
@@ -394,8 +445,7 @@ impl Renderer {
         let (workers, tiles) = (&self.workers, &self.tiles);
         let setup = TileSetup {
             grid,
-            view,
-            prims,
+            layers: &self.layers,
             halves,
             key,
             half,
@@ -482,8 +532,7 @@ impl Renderer {
 /// What every tile of a frame shares.
 struct TileSetup<'a> {
     grid: Grid,
-    view: &'a View,
-    prims: &'a [body::Prim],
+    layers: &'a [tile::BodyLayer],
     halves: [&'a raster::HalfBins; 2],
     key: raster::DepthKey,
     half: f32,
@@ -496,10 +545,7 @@ pool::multiversion! {
     /// returns the nanoseconds spent rasterising and resolving.
     fn render_tile(w: &mut Worker, t: usize, f: &TileSetup, out: &mut [f32]) -> (u64, u64) {
         let r0 = Instant::now();
-        let (ox, oy) = f.grid.origin(t);
-        w.buf.reset(f.grid.tile_samples(), ox, oy);
-        w.buf.cast_body(f.view, f.prims);
-        w.buf.close_blocks();
+        w.buf.reset_with(f.grid.tile_samples(), &f.layers[t]);
         let n_segs = raster::sort_tile(
             f.halves[0].tile(t),
             f.halves[1].tile(t),
@@ -516,31 +562,59 @@ pool::multiversion! {
 }
 
 pool::multiversion! {
-    /// Projects and shades strands `range` into `out` and `colors`, which start at point
-    /// `base`.
-    fn project_strands(
-        view: &View,
+    /// Projects `points` into `out`.
+    fn project_points(view: &View, points: &[[f32; 3]], out: &mut [ScreenVertex]) {
+        for (o, &pt) in out.iter_mut().zip(points) {
+            let sp = view.project(pt);
+            *o = ScreenVertex {
+                x: sp[0],
+                y: sp[1],
+                z: sp[2],
+            };
+        }
+    }
+}
+
+pool::multiversion! {
+    /// Shades the needed points of strands `range` into `colors`, which starts at point
+    /// `base` (`needed` covers every point).
+    fn shade_strands(
         shade: &point_colors::PointShader,
         strands: &StrandBuf,
         range: std::ops::Range<usize>,
         base: usize,
-        out: &mut [ScreenVertex],
+        needed: &[u8],
         colors: &mut [u32],
     ) {
         for s in range {
             let (a, b) = (strands.offsets[s] as usize, strands.offsets[s + 1] as usize);
-            let pts = &strands.points[a..b];
-            for (o, &pt) in out[a - base..b - base].iter_mut().zip(pts) {
-                let sp = view.project(pt);
-                *o = ScreenVertex {
-                    x: sp[0],
-                    y: sp[1],
-                    z: sp[2],
-                };
-            }
-            shade.strand(s, pts, a, &mut colors[a - base..b - base]);
+            shade.strand(s, &strands.points[a..b], a, &needed[a..b], &mut colors[a - base..b - base]);
         }
     }
+}
+
+/// Splits `v`, one entry per strand point, into the points of K equal runs of strands (run c
+/// holds strands c·ns/K..(c+1)·ns/K, ns = `offsets.len()` − 1), each with the index of its
+/// first point and behind its own lock, so that K jobs can fill them at once.
+fn split_by_strands<'a, T, const K: usize>(
+    v: &'a mut [T],
+    offsets: &[u32],
+) -> [Mutex<(usize, &'a mut [T])>; K] {
+    let ns = offsets.len().saturating_sub(1);
+    let mut rest = v;
+    let mut taken = 0usize;
+    std::array::from_fn(|c| {
+        let end = if ns == 0 {
+            0
+        } else {
+            offsets[(c + 1) * ns / K] as usize
+        };
+        let (mine, tail) = std::mem::take(&mut rest).split_at_mut(end - taken);
+        rest = tail;
+        let first = taken;
+        taken = end;
+        Mutex::new((first, mine))
+    })
 }
 
 /// Writes `img` as an 8-bit RGB PNG.

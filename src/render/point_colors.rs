@@ -123,7 +123,8 @@ impl PointShader<'_> {
     /// previous to its next point (one-sided at the ends). Four points at a time; a last
     /// group of fewer repeats the strand's last point in the spare lanes and drops them.
     #[inline(always)]
-    pub fn strand(&self, s: usize, pts: &[[f32; 3]], first: usize, out: &mut [u32]) {
+    /// Groups of four points none of which is `needed` are skipped.
+    pub fn strand(&self, s: usize, pts: &[[f32; 3]], first: usize, needed: &[u8], out: &mut [u32]) {
         let Some(last) = pts.len().checked_sub(1) else {
             return;
         };
@@ -132,6 +133,9 @@ impl PointShader<'_> {
             shader.color = *c;
         }
         for k0 in (0..pts.len()).step_by(4) {
+            if needed[k0..(k0 + 4).min(pts.len())].iter().all(|&n| n == 0) {
+                continue;
+            }
             let mut pt = [[0.0f32; 4]; 3];
             let mut d = [[0.0f32; 4]; 3];
             let mut lq = [[0.0f32; 4]; 3];
@@ -275,7 +279,7 @@ mod tests {
             let (a, b) = (offsets[s] as usize, offsets[s + 1] as usize);
             let pts = &points[a..b];
             let mut words = vec![0u32; pts.len()];
-            ps.strand(s, pts, a, &mut words);
+            ps.strand(s, pts, a, &vec![1; pts.len()], &mut words);
             for (k, &w) in words.iter().enumerate() {
                 let (prev, next) = (pts[k.saturating_sub(1)], pts[(k + 1).min(pts.len() - 1)]);
                 let t = normalize(sub(next, prev));

@@ -5,6 +5,8 @@
 //! segments the AWT paper uses for antialiasing, Bertails et al. 2003, §5.1), each tile's own
 //! list with a stable radix sort, so the order is exact and the same on every run.
 
+use super::tile::BodyCull;
+
 /// Pixels per tile side. Tiles have no apron: the postfilter runs over the whole frame once
 /// every tile is resolved, so no sample is drawn twice.
 pub(crate) const TILE: usize = 32;
@@ -45,9 +47,8 @@ pub(crate) struct Bins {
 /// The bins of one half of the strands.
 #[derive(Debug, Default)]
 pub(crate) struct HalfBins {
-    /// First vertex and tile rectangle of each visible segment, in strand order.
-    firsts: Vec<u32>,
-    rects: Vec<[u16; 4]>,
+    /// First vertex and tile of each segment binned, in strand order.
+    pairs: Vec<(u32, u32)>,
     cursor: Vec<u32>,
     /// Midpoint depth range of the visible segments.
     zlo: f32,
@@ -144,8 +145,11 @@ impl Grid {
 
 impl HalfBins {
     /// Finds the visible segments of strands `strands` of `verts` (strand `s` spans
-    /// `offsets[s]..offsets[s+1]`), their tiles in `grid` and depth range, and counts them per
-    /// tile. `reach` is how far (samples) a line reaches beyond its centre line.
+    /// `offsets[s]..offsets[s+1]`), their tiles in `grid` except those where `cull` says the
+    /// body hides them, and their depth range, and counts them per tile; marks the points of
+    /// each segment kept in `needed` (`needed.1[k]` is point `needed.0 + k`). `reach` is how
+    /// far (samples) a line reaches beyond its centre line.
+    #[allow(clippy::too_many_arguments)]
     pub fn count(
         &mut self,
         verts: &[ScreenVertex],
@@ -153,9 +157,11 @@ impl HalfBins {
         strands: std::ops::Range<usize>,
         grid: &Grid,
         reach: f32,
+        cull: &BodyCull,
+        needed: (usize, &mut [u8]),
     ) {
-        self.firsts.clear();
-        self.rects.clear();
+        let (base, needed) = needed;
+        self.pairs.clear();
         let nt = grid.tiles();
         self.start.clear();
         self.start.resize(nt + 1, 0);
@@ -181,17 +187,26 @@ impl HalfBins {
                 }
                 let (x0, x1) = (floor_pos(x0), floor_pos(x1).min(lastx));
                 let (y0, y1) = (floor_pos(y0), floor_pos(y1).min(lasty));
-                for ty in y0..y1 + 1 {
-                    for tx in x0..x1 + 1 {
-                        self.start[ty * grid.tiles_x + tx + 1] += 1;
-                    }
-                }
+                // The key range spans every segment on screen, culled or not.
                 let z = 0.5 * (p.z + q.z);
                 zlo = mn(zlo, z);
                 zhi = mx(zhi, z);
-                self.firsts.push(i as u32);
-                self.rects
-                    .push([x0 as u16, x1 as u16, y0 as u16, y1 as u16]);
+                let mut kept = false;
+                for ty in y0..y1 + 1 {
+                    for tx in x0..x1 + 1 {
+                        let t = ty * grid.tiles_x + tx;
+                        if cull.hides(t, p, q) {
+                            continue;
+                        }
+                        self.start[t + 1] += 1;
+                        self.pairs.push((i as u32, t as u32));
+                        kept = true;
+                    }
+                }
+                if kept {
+                    needed[i - base] = 1;
+                    needed[i + 1 - base] = 1;
+                }
             }
         }
         for t in 1..=nt {
@@ -207,21 +222,16 @@ impl HalfBins {
         self.items.resize(total, SegRec::default());
         self.cursor.clear();
         self.cursor.extend_from_slice(&self.start[..nt]);
-        for (&i, &[x0, x1, y0, y1]) in self.firsts.iter().zip(&self.rects) {
+        for &(i, t) in &self.pairs {
             let i = i as usize;
-            let rec = SegRec {
+            let c = &mut self.cursor[t as usize];
+            self.items[*c as usize] = SegRec {
                 a: verts[i],
                 b: verts[i + 1],
                 ca: colors[i],
                 cb: colors[i + 1],
             };
-            for ty in y0 as usize..y1 as usize + 1 {
-                for tx in x0 as usize..x1 as usize + 1 {
-                    let c = &mut self.cursor[ty * grid.tiles_x + tx];
-                    self.items[*c as usize] = rec;
-                    *c += 1;
-                }
-            }
+            *c += 1;
         }
     }
 
