@@ -36,7 +36,7 @@ impl Resolve<'_> {
             let q = self.maps.light_space(p);
             let inside = q[0] >= 0.0 && q[1] >= 0.0 && q[0] < self.map_size && q[1] < self.map_size;
             if inside {
-                (-self.kappa * self.maps.opacity(q, 0.0)).exp()
+                super::shading::exp(-self.kappa * self.maps.opacity(q, 0.0))
             } else {
                 1.0
             }
