@@ -4,15 +4,22 @@
 //! A frame goes through four stages:
 //!
 //! 1. **Shadow maps** ([`shadow`]): 16 opacity maps perpendicular to the light.
-//! 2. **Projection and shading**: every strand point is projected to the screen and gets its
-//!    Kajiya-Kay colour under the maps' transmittance ([`shading`], [`point_colors`]); Zhang
-//!    and Wünsche shade per vertex and let the rasteriser interpolate colours (§6.1), and so
-//!    does this renderer.
-//! 3. **Rasterising** ([`raster`]): segments sorted by depth once, binned into 32×32-pixel
-//!    tiles; each tile ray casts the body ([`body`]) then blends its segments front to back on
-//!    a supersampled grid.
+//! 2. **Projection**: every strand point is projected to the screen.
+//! 3. **Rasterising** ([`raster`], [`tile`]): the body ([`body`]) is ray cast into every
+//!    32×32-pixel tile; segments are binned into the tiles they touch, except where the body
+//!    hides them. Then the points that binned segments use get their Kajiya-Kay colour under
+//!    the maps' transmittance ([`shading`], [`point_colors`]): Zhang and Wünsche shade per
+//!    vertex and let the rasteriser interpolate colours (§6.1), and so does this renderer.
+//!    Each tile sorts its segments by depth and blends them front to back on a supersampled
+//!    grid.
 //! 4. **Resolve** ([`resolve`]): body or background behind the hair, box filter per pixel,
 //!    3×3 postfilter, sRGB.
+//!
+//! The stage times report the shading with the projection ([`StageTimes::shading`]).
+//!
+//! The hot loops are compiled twice, for the baseline x86-64 and for AVX2, and chosen at run
+//! time (`pool::multiversion!`); no fused multiply-add is enabled, so both give the same
+//! pixels.
 //!
 //! Tiles are independent and each is done by one thread, in a fixed order of segments, so the
 //! image is the same bit for bit whatever the number of threads. Every buffer belongs to the
@@ -82,9 +89,10 @@ impl Image {
 pub struct StageTimes {
     /// Building the 16 opacity shadow maps.
     pub shadow_maps: Duration,
-    /// Projecting and shading every strand point.
+    /// Projecting every strand point, and shading those that binned segments use.
     pub shading: Duration,
-    /// Sorting and binning segments, then the tile pass's body casting and blending.
+    /// Casting the body into the tiles, binning the segments, then the tile pass's sorting
+    /// and blending.
     pub rasterising: Duration,
     /// The tile pass's resolve (body shading, filters, sRGB) and the copy to the image.
     pub resolve: Duration,
