@@ -277,6 +277,43 @@ impl TileBuf {
                     continue;
                 }
             }
+            if thin {
+                // The group's columns (at most BLOCK = 4), their parameters computed four
+                // lanes at once by the same arithmetic as below; then each column's fixed
+                // window (moved inside the tile at its far edge), all four samples at once.
+                // No culling test per column: the group passed one, and a sample that is
+                // opaque or behind the body refuses the blend anyway; the test would cost as
+                // much as the blend.
+                let fk = lanes(|k| fi + k as f32);
+                let lo = lanes(|k| mx(maj0, fk[k]));
+                let hi = lanes(|k| mn(maj1, fk[k] + 1.0));
+                let cov_maj = lanes(|k| hi[k] - lo[k]);
+                let t = lanes(|k| (0.5 * (lo[k] + hi[k]) - maj0) * inv);
+                let c = lanes(|k| min0 + t[k] * (min1 - min0));
+                let z = lanes(|k| z0 + t[k] * dz);
+                let rgb = [0, 1, 2].map(|ch| lanes(|k| c0[ch] + t[k] * dc[ch]));
+                for k in 0..group_end - i {
+                    if cov_maj[k] <= 0.0 {
+                        continue;
+                    }
+                    let col_i = i + k;
+                    let (y_lo, y_hi) = (c[k] - h, c[k] + h);
+                    let js = floor_pos(y_lo).min(n - WINDOW);
+                    self.blend_window(
+                        col_i * stride_maj + js * stride_min,
+                        stride_min,
+                        js,
+                        Column::new(x_major, col_i, self.nb),
+                        z[k],
+                        alpha * cov_maj[k],
+                        (y_lo, y_hi),
+                        &Px([rgb[0][k], rgb[1][k], rgb[2][k], -1.0]),
+                    );
+                }
+                fi += (group_end - i) as f32;
+                i = group_end;
+                continue;
+            }
             let lo = mx(maj0, fi);
             let hi = mn(maj1, fi + 1.0);
             fi += 1.0;
@@ -299,24 +336,6 @@ impl TileBuf {
                 -1.0,
             ]);
             let w0 = alpha * cov_maj;
-            if thin {
-                // A fixed window (moved inside the tile at its far edge), all four samples
-                // at once. No culling test per column: its group passed one, and a sample
-                // that is opaque or behind the body refuses the blend anyway; the test would
-                // cost as much as the blend.
-                let js = j0.min(n - WINDOW);
-                self.blend_window(
-                    col_i * stride_maj + js * stride_min,
-                    stride_min,
-                    js,
-                    col,
-                    z,
-                    w0,
-                    (y_lo, y_hi),
-                    &rgb,
-                );
-                continue;
-            }
             let j1 = ceil_pos(y_hi).min(n);
             if j1 <= j0 || self.column_hidden(col, j0, j1 - 1, z) {
                 continue;
@@ -562,6 +581,13 @@ impl TileBuf {
         self.block_close.copy_from_slice(&layer.block_close);
         self.super_close.copy_from_slice(&layer.super_close);
     }
+}
+
+/// Four lanes of a value, computed together: written lane by lane without branches, so that
+/// the compiler makes each line one vector instruction.
+#[inline(always)]
+fn lanes(f: impl Fn(usize) -> f32) -> [f32; 4] {
+    [f(0), f(1), f(2), f(3)]
 }
 
 /// One sample: linear r, g, b accumulated front to back (premultiplied), then the
