@@ -645,6 +645,13 @@ mod tests {
             fov_y_deg: 3.0,
         };
         let view = View::new(&cam, 64, 64);
+        let (mut buf, mut layer) = (TileBuf::default(), BodyLayer::default());
+        buf.cast_layer(64, (0, 0), &view, &sphere_prims(&view), &mut layer);
+        (view, layer)
+    }
+
+    /// The body of [`sphere_tile`] as seen by `view`.
+    fn sphere_prims(view: &View) -> Vec<super::super::body::Prim> {
         let body = BodyBuf {
             sphere_centers: vec![[0.0, 0.0, 0.0]],
             sphere_radii: vec![0.1],
@@ -653,10 +660,8 @@ mod tests {
             scalp_rotation: [0.0, 0.0, 0.0, 1.0],
         };
         let mut prims = Vec::new();
-        super::super::body::prims(&body, &view, 64.0, 64.0, &mut prims);
-        let (mut buf, mut layer) = (TileBuf::default(), BodyLayer::default());
-        buf.cast_layer(64, (0, 0), &view, &prims, &mut layer);
-        (view, layer)
+        super::super::body::prims(&body, view, 64.0, 64.0, &mut prims);
+        prims
     }
 
     fn at(view: &View, p: [f32; 3]) -> ScreenVertex {
@@ -691,19 +696,7 @@ mod tests {
         let mut direct = TileBuf::default();
         direct.reset_samples(64, 0, 0);
         direct.reset_body();
-        let prims = {
-            let mut p = Vec::new();
-            let body = BodyBuf {
-                sphere_centers: vec![[0.0, 0.0, 0.0]],
-                sphere_radii: vec![0.1],
-                scalp_center: [0.0, 0.0, 0.0],
-                scalp_radii: [0.0; 3],
-                scalp_rotation: [0.0, 0.0, 0.0, 1.0],
-            };
-            super::super::body::prims(&body, &view, 64.0, 64.0, &mut p);
-            p
-        };
-        direct.cast_body(&view, &prims);
+        direct.cast_body(&view, &sphere_prims(&view));
         direct.close_blocks();
         let mut from_layer = TileBuf::default();
         // A previous tile's leftovers must not survive.
