@@ -22,8 +22,8 @@ pub struct RenderRow {
     pub height: u32,
     pub fps_1_thread: f64,
     pub fps_2_threads: f64,
-    /// Milliseconds per frame on 1 thread: shadow maps, shading (projecting and shading
-    /// every strand point), rasterising, resolve.
+    /// Milliseconds per frame on 1 thread: shadow maps, shading (projecting every strand
+    /// point, and shading those that binned segments use), rasterising, resolve.
     pub stage_ms_1_thread: [f64; 4],
 }
 

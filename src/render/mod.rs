@@ -120,7 +120,8 @@ pub fn default_threads() -> usize {
     std::thread::available_parallelism().map_or(1, |n| n.get().min(64))
 }
 
-/// Work items of the shading stage (strand chunks) and of the postfilter (bands of rows).
+/// Work items of the projection and shading (runs of strands), of the body casting (runs of
+/// tiles) and of the gather and postfilter (bands of rows).
 const CHUNKS: usize = 16;
 
 struct Worker {
@@ -362,13 +363,7 @@ impl Renderer {
         let (grid, prims) = (self.grid, &self.prims);
         let nt = grid.tiles();
         self.layers.resize_with(nt, Default::default);
-        let mut rest: &mut [tile::BodyLayer] = &mut self.layers;
-        let runs: [Mutex<(usize, &mut [tile::BodyLayer])>; CHUNKS] = std::array::from_fn(|c| {
-            let (t0, t1) = (c * nt / CHUNKS, (c + 1) * nt / CHUNKS);
-            let (mine, tail) = std::mem::take(&mut rest).split_at_mut(t1 - t0);
-            rest = tail;
-            Mutex::new((t0, mine))
-        });
+        let runs = pool::split_parts::<_, CHUNKS>(&mut self.layers, |c| (c + 1) * nt / CHUNKS);
         let workers = &self.workers;
         let next = AtomicUsize::new(0);
         let job = |k: usize| {
@@ -484,19 +479,13 @@ impl Renderer {
         self.linear.resize(w * h * 3, 0.0);
         // The gather, in bands of whole rows of tiles, one job each.
         let (grid, tiles) = (self.grid, &self.tiles);
-        let mut rest: &mut [f32] = &mut self.linear;
-        let mut taken = 0;
-        let rows: [Mutex<(usize, usize, &mut [f32])>; CHUNKS] = std::array::from_fn(|c| {
-            let (t0, t1) = (c * grid.tiles_y / CHUNKS, (c + 1) * grid.tiles_y / CHUNKS);
-            let end = (t1 * TILE).min(h);
-            let (mine, tail) = std::mem::take(&mut rest).split_at_mut((end - taken) * w * 3);
-            rest = tail;
-            taken = end;
-            Mutex::new((t0, t1, mine))
+        let rows = pool::split_parts::<_, CHUNKS>(&mut self.linear, |c| {
+            ((c + 1) * grid.tiles_y / CHUNKS * TILE).min(h) * w * 3
         });
         let gather = |c: usize| {
+            let (t0, t1) = (c * grid.tiles_y / CHUNKS, (c + 1) * grid.tiles_y / CHUNKS);
             let mut g = rows[c].lock().unwrap_or_else(|e| e.into_inner());
-            let (t0, t1, ref mut dst) = *g;
+            let (_, ref mut dst) = *g;
             for ty in t0..t1 {
                 let y0 = (ty - t0) * TILE;
                 let ny = TILE.min(h - ty * TILE);
@@ -518,18 +507,13 @@ impl Renderer {
         out.width = self.width;
         out.height = self.height;
         out.rgb.resize(w * h * 3, 0);
-        let mut rest: &mut [u8] = &mut out.rgb;
-        let bands: [Mutex<(usize, usize, &mut [u8])>; CHUNKS] = std::array::from_fn(|c| {
-            let (y0, y1) = (c * h / CHUNKS, (c + 1) * h / CHUNKS);
-            let (mine, tail) = std::mem::take(&mut rest).split_at_mut((y1 - y0) * w * 3);
-            rest = tail;
-            Mutex::new((y0, y1, mine))
-        });
+        let bands = pool::split_parts::<_, CHUNKS>(&mut out.rgb, |c| (c + 1) * h / CHUNKS * w * 3);
         let (linear, lut, s) = (&self.linear, &self.lut, self.params.postfilter);
         let scratch = &self.band_scratch;
         let job = |c: usize| {
+            let (y0, y1) = (c * h / CHUNKS, (c + 1) * h / CHUNKS);
             let mut g = bands[c].lock().unwrap_or_else(|e| e.into_inner());
-            let (y0, y1, ref mut band) = *g;
+            let (_, ref mut band) = *g;
             let mut row = scratch[c].lock().unwrap_or_else(|e| e.into_inner());
             resolve::postfilter_rows((linear, w, h), y0..y1, s, lut, band, &mut row);
         };
@@ -609,19 +593,12 @@ fn split_by_strands<'a, T, const K: usize>(
     offsets: &[u32],
 ) -> [Mutex<(usize, &'a mut [T])>; K] {
     let ns = offsets.len().saturating_sub(1);
-    let mut rest = v;
-    let mut taken = 0usize;
-    std::array::from_fn(|c| {
-        let end = if ns == 0 {
+    pool::split_parts(v, |c| {
+        if ns == 0 {
             0
         } else {
             offsets[(c + 1) * ns / K] as usize
-        };
-        let (mine, tail) = std::mem::take(&mut rest).split_at_mut(end - taken);
-        rest = tail;
-        let first = taken;
-        taken = end;
-        Mutex::new((first, mine))
+        }
     })
 }
 

@@ -154,6 +154,34 @@ impl Drop for Pool {
     }
 }
 
+/// Splits `v` into K consecutive parts, part c ending at index `end(c)` (non-decreasing, the
+/// last one at most `v.len()`), each with the index of its first element and behind its own
+/// lock, so that K jobs can each fill one at once. An array, not a `Vec`: splitting allocates
+/// nothing.
+pub(crate) fn split_parts<T, const K: usize>(
+    v: &mut [T],
+    end: impl Fn(usize) -> usize,
+) -> [Mutex<(usize, &mut [T])>; K] {
+    let mut rest = v;
+    let mut taken = 0usize;
+    std::array::from_fn(|c| {
+        let e = end(c);
+        let (mine, tail) = std::mem::take(&mut rest).split_at_mut(e - taken);
+        rest = tail;
+        let first = taken;
+        taken = e;
+        Mutex::new((first, mine))
+    })
+}
+
+/// Runs `f(0..n)` on `pool`, or on the calling thread when there is none.
+pub(crate) fn for_each_on(pool: Option<&Pool>, n: usize, f: &(dyn Fn(usize) + Sync)) {
+    match pool {
+        Some(p) => p.for_each(n, f),
+        None => (0..n).for_each(f),
+    }
+}
+
 /// Defines a function compiled twice, for the baseline processor and for AVX2, and choosing at
 /// run time (the check is one cached load).
 ///
@@ -184,3 +212,31 @@ macro_rules! multiversion {
     };
 }
 pub(crate) use multiversion;
+
+#[cfg(test)]
+mod split_tests {
+    use super::*;
+
+    #[test]
+    fn split_parts_cover_the_slice_in_order_with_their_starts() {
+        let mut v: Vec<u32> = (0..10).collect();
+        let ends = [3, 3, 7, 10];
+        let parts = split_parts::<_, 4>(&mut v, |c| ends[c]);
+        let got: Vec<(usize, Vec<u32>)> = parts
+            .into_iter()
+            .map(|m| {
+                let (first, s) = m.into_inner().unwrap();
+                (first, s.to_vec())
+            })
+            .collect();
+        assert_eq!(
+            got,
+            vec![
+                (0, vec![0, 1, 2]),
+                (3, vec![]),
+                (3, vec![3, 4, 5, 6]),
+                (7, vec![7, 8, 9])
+            ]
+        );
+    }
+}

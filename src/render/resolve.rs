@@ -103,9 +103,9 @@ impl Resolve<'_> {
 }
 
 /// The postfilter and sRGB encoding of rows `rows` of a `width`-pixel-wide frame of linear
-/// pixels `linear` (row-major, 3 floats each, `height` rows; the three given together) into `out` (those rows' 8-bit
-/// pixels): (1 − s)·p + s·([1 2 1]ᵀ[1 2 1] / 16 ∗ p), on linear values, the frame's edge pixels
-/// repeated beyond it.
+/// pixels `linear` (row-major, 3 floats each, `height` rows; the three given together) into
+/// `out` (those rows' 8-bit pixels): (1 − s)·p + s·([1 2 1]ᵀ[1 2 1] / 16 ∗ p), on linear
+/// values, the frame's edge pixels repeated beyond it.
 ///
 /// The kernel is separable: each output row is the vertical [1 2 1] sum of three input rows
 /// (one pass over contiguous floats, which the compiler vectorises), then the horizontal

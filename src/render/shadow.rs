@@ -18,6 +18,7 @@
 use std::sync::Mutex;
 
 use super::camera::{cross, dot, normalize};
+use super::pool::{for_each_on, split_parts};
 
 /// Number of opacity maps (Zhang and Wünsche 2007, §6.1: sixteen, four per render target).
 pub const MAPS: usize = 16;
@@ -148,10 +149,7 @@ impl ShadowMaps {
             m.resize(me.size * me.size * MAPS, 0.0);
             deposit_strands(me, &mut m, offsets, h * ns / HALVES..(h + 1) * ns / HALVES);
         };
-        match pool {
-            Some(p) => p.for_each(HALVES, &job),
-            None => (0..HALVES).for_each(job),
-        }
+        for_each_on(pool, HALVES, &job);
         let [p0, p1] = &mut self.partial;
         let (p0, p1) = (
             &*p0.get_mut().unwrap_or_else(|e| e.into_inner()),
@@ -161,13 +159,8 @@ impl ShadowMaps {
         // texel's sum is the same whoever does it).
         let row = self.size * MAPS;
         let rows = self.size;
-        let mut rest: &mut [f32] = &mut self.omega;
-        let bands: [std::sync::Mutex<(usize, &mut [f32])>; SUM_BANDS] = std::array::from_fn(|c| {
-            let (r0, r1) = (c * rows / SUM_BANDS, (c + 1) * rows / SUM_BANDS);
-            let (mine, tail) = std::mem::take(&mut rest).split_at_mut((r1 - r0) * row);
-            rest = tail;
-            std::sync::Mutex::new((r0 * row, mine))
-        });
+        let bands =
+            split_parts::<_, SUM_BANDS>(&mut self.omega, |c| (c + 1) * rows / SUM_BANDS * row);
         let plane = self.size * self.size;
         let sum = |c: usize| {
             let mut g = bands[c].lock().unwrap_or_else(|e| e.into_inner());
@@ -193,10 +186,7 @@ impl ShadowMaps {
                 }
             }
         };
-        match pool {
-            Some(p) => p.for_each(SUM_BANDS, &sum),
-            None => (0..SUM_BANDS).for_each(sum),
-        }
+        for_each_on(pool, SUM_BANDS, &sum);
     }
 
     /// Sets up the light frame around the hair and the light-space points (in chunks on
@@ -214,29 +204,24 @@ impl ShadowMaps {
         // Every point is written below: resized, not cleared.
         self.lp.resize(points.len(), [0.0; 3]);
         let n = points.len();
-        let mut rest: &mut [[f32; 3]] = &mut self.lp;
-        type Part<'a> = (usize, &'a mut [[f32; 3]], [f32; 3], [f32; 3]);
-        let parts: [Mutex<Part>; FRAME_CHUNKS] = std::array::from_fn(|c| {
-            let (p0, p1) = (c * n / FRAME_CHUNKS, (c + 1) * n / FRAME_CHUNKS);
-            let (mine, tail) = std::mem::take(&mut rest).split_at_mut(p1 - p0);
-            rest = tail;
-            Mutex::new((p0, mine, [f32::INFINITY; 3], [f32::NEG_INFINITY; 3]))
-        });
+        let parts = split_parts::<_, FRAME_CHUNKS>(&mut self.lp, |c| (c + 1) * n / FRAME_CHUNKS);
+        // Per chunk, the bounds of its points.
+        let bounds: [Mutex<([f32; 3], [f32; 3])>; FRAME_CHUNKS] =
+            std::array::from_fn(|_| Mutex::new(([f32::INFINITY; 3], [f32::NEG_INFINITY; 3])));
         let project = |c: usize| {
             let mut g = parts[c].lock().unwrap_or_else(|e| e.into_inner());
-            let (p0, ref mut out, ref mut lo, ref mut hi) = *g;
+            let (p0, ref mut out) = *g;
+            let mut b = bounds[c].lock().unwrap_or_else(|e| e.into_inner());
+            let (lo, hi) = &mut *b;
             to_light_frame(&points[p0..], [u, v, d], out, lo, hi);
         };
-        match pool {
-            Some(p) => p.for_each(FRAME_CHUNKS, &project),
-            None => (0..FRAME_CHUNKS).for_each(project),
-        }
+        for_each_on(pool, FRAME_CHUNKS, &project);
         let (mut lo, mut hi) = ([f32::INFINITY; 3], [f32::NEG_INFINITY; 3]);
-        for part in &parts {
-            let g = part.lock().unwrap_or_else(|e| e.into_inner());
+        for b in &bounds {
+            let (l, h) = *b.lock().unwrap_or_else(|e| e.into_inner());
             for a in 0..3 {
-                lo[a] = lo[a].min(g.2[a]);
-                hi[a] = hi[a].max(g.3[a]);
+                lo[a] = lo[a].min(l[a]);
+                hi[a] = hi[a].max(h[a]);
             }
         }
         if points.is_empty() {
@@ -254,10 +239,7 @@ impl ShadowMaps {
                 q[1] = (q[1] - v0) * inv_texel;
             }
         };
-        match pool {
-            Some(p) => p.for_each(FRAME_CHUNKS, &to_texels),
-            None => (0..FRAME_CHUNKS).for_each(to_texels),
-        }
+        for_each_on(pool, FRAME_CHUNKS, &to_texels);
         (self.inv_texel, self.u0, self.v0) = (inv_texel, u0, v0);
         self.z0 = lo[2];
         self.dz = ((hi[2] - lo[2]) / (MAPS - 1) as f32).max(1e-5);
