@@ -28,8 +28,9 @@ use super::raster::{ceil_pos, floor_pos, mn, mx, ScreenVertex, SegRec, OPAQUE};
 
 /// Side of a culling block, samples (a power of two).
 const BLOCK: usize = 4;
-/// Blocks per side of a superblock, the coarse level of the culling test.
-const SUPER: usize = 4;
+/// Lanes of one comparison of a row of culling depths: rows of blocks are padded to a
+/// multiple of this, so that a row is tested in whole vectors and yields a bit mask.
+const LANES: usize = 16;
 /// Samples of the fixed per-column window of thin lines.
 const WINDOW: usize = 4;
 
@@ -52,15 +53,15 @@ pub(crate) struct TileBuf {
     pub alive: usize,
     /// Blocks of BLOCK² samples per side.
     nb: usize,
-    /// Per block, samples not yet opaque.
+    /// Blocks per row in `block_alive` and `block_close`: `nb` padded to whole LANES (block
+    /// (bx, by) is entry `by · stride + bx`).
+    stride: usize,
+    /// Per block, samples not yet opaque (0 in the padding).
     block_alive: Vec<u32>,
     /// Per block, the view depth at and beyond which nothing shows: the farthest body depth
-    /// (`INFINITY` if a sample has no body), `NEG_INFINITY` once every sample is opaque.
+    /// (`INFINITY` if a sample has no body), `NEG_INFINITY` once every sample is opaque (and
+    /// in the padding).
     block_close: Vec<f32>,
-    /// Superblocks (SUPER² blocks) per side.
-    ns: usize,
-    /// Per superblock, the largest `block_close` of its blocks.
-    super_close: Vec<f32>,
     /// Whether the body covers any sample of the tile.
     body_seen: bool,
 }
@@ -75,15 +76,36 @@ impl TileBuf {
         self.px.clear();
         self.px.resize(m, Px([0.0, 0.0, 0.0, 1.0]));
         self.alive = m;
-        self.nb = n.div_ceil(BLOCK);
-        self.ns = self.nb.div_ceil(SUPER);
+        self.set_blocks(n);
         self.block_alive.clear();
         for by in 0..self.nb {
             let h = (n - by * BLOCK).min(BLOCK);
-            for bx in 0..self.nb {
-                let w = (n - bx * BLOCK).min(BLOCK);
+            for bx in 0..self.stride {
+                let w = n.saturating_sub(bx * BLOCK).min(BLOCK);
                 self.block_alive.push((w * h) as u32);
             }
+        }
+    }
+
+    /// Sets the block geometry of a tile of `n`² samples.
+    fn set_blocks(&mut self, n: usize) {
+        self.nb = n.div_ceil(BLOCK);
+        self.stride = self.nb.div_ceil(LANES) * LANES;
+    }
+
+    /// Block `(bx, by)`'s entry in the per-block arrays.
+    #[inline(always)]
+    fn block_at(&self, bx: usize, by: usize) -> usize {
+        by * self.stride + bx
+    }
+
+    /// The culling depths, for the tests.
+    #[inline(always)]
+    fn culling(&self) -> Culling<'_> {
+        Culling {
+            nb: self.nb,
+            stride: self.stride,
+            block_close: &self.block_close,
         }
     }
 
@@ -95,10 +117,17 @@ impl TileBuf {
         // `prim` is read only where `zb` is finite, and written wherever it is set: no clear.
         self.prim.resize(m, 0);
         self.block_close.clear();
-        self.block_close.resize(self.nb * self.nb, f32::INFINITY);
-        self.super_close.clear();
-        self.super_close.resize(self.ns * self.ns, f32::INFINITY);
+        self.block_close
+            .resize(self.nb * self.stride, f32::INFINITY);
+        self.close_padding();
         self.body_seen = false;
+    }
+
+    /// Sets the padding of each row of `block_close` to `NEG_INFINITY`.
+    fn close_padding(&mut self) {
+        for row in self.block_close.chunks_exact_mut(self.stride) {
+            row[self.nb..].fill(f32::NEG_INFINITY);
+        }
     }
 
     /// Sets each block's farthest body depth, once the body is cast.
@@ -112,39 +141,17 @@ impl TileBuf {
         self.block_close.fill(f32::NEG_INFINITY);
         for j in 0..n {
             for i in 0..n {
-                let b = (j / BLOCK) * self.nb + i / BLOCK;
+                let b = self.block_at(i / BLOCK, j / BLOCK);
                 self.block_close[b] = self.block_close[b].max(self.zb[j * n + i]);
             }
         }
-        for b in 0..self.nb * self.nb {
-            self.close_super(b);
-        }
-    }
-
-    /// Recomputes the superblock of block `b` from its blocks.
-    fn close_super(&mut self, b: usize) {
-        let (sx, sy) = ((b % self.nb) / SUPER, (b / self.nb) / SUPER);
-        let mut far = f32::NEG_INFINITY;
-        for by in sy * SUPER..((sy + 1) * SUPER).min(self.nb) {
-            let row = by * self.nb;
-            for bx in sx * SUPER..((sx + 1) * SUPER).min(self.nb) {
-                far = mx(far, self.block_close[row + bx]);
-            }
-        }
-        self.super_close[sy * self.ns + sx] = far;
     }
 
     /// Whether nothing at view depth `z` or beyond can show in tile-relative box
     /// [x0, x1] × [y0, y1]: every block it touches is opaque, or hidden by the body.
     #[inline(always)]
     fn hidden(&self, x0: f32, x1: f32, y0: f32, y1: f32, z: f32) -> bool {
-        let c = Culling {
-            nb: self.nb,
-            ns: self.ns,
-            block_close: &self.block_close,
-            super_close: &self.super_close,
-        };
-        c.hidden(x0, x1, y0, y1, z)
+        self.culling().hidden(x0, x1, y0, y1, z)
     }
 
     /// Ray casts the body primitives `prims` into the depth buffer.
@@ -250,89 +257,126 @@ impl TileBuf {
         let h = half * (1.0 + slope * slope).sqrt();
         // At most 3 samples across: any placement touches at most WINDOW samples.
         let thin = 2.0 * h <= (WINDOW - 1) as f32 && n >= WINDOW;
-        let (stride_maj, stride_min) = if x_major { (1, n) } else { (n, 1) };
         let i0 = floor_pos(maj0);
         let i1 = ceil_pos(maj1).min(n);
         let dz = z1 - z0;
         let dc = [c1[0] - c0[0], c1[1] - c0[1], c1[2] - c0[2]];
-        let mut fi = i0 as f32;
         // Columns come in groups of one culling block's width. A group whose whole extent
         // (its minor range, and the segment's nearest depth over it) lies in opaque or
         // body-hidden blocks is skipped in one test: every column of it would fail its own.
-        let mut group_end = i0;
-        let mut i = i0;
-        while i < i1 {
-            if i >= group_end {
-                group_end = ((i / BLOCK + 1) * BLOCK).min(i1);
-                let ta = (mx(maj0, fi) - maj0) * inv;
-                let tb = (mn(maj1, group_end as f32) - maj0) * inv;
-                let (ca, cb) = (min0 + ta * (min1 - min0), min0 + tb * (min1 - min0));
-                let zg = mn(z0 + ta * dz, z0 + tb * dz);
-                let g0 = floor_pos(mn(ca, cb) - h);
-                let g1 = ceil_pos(mx(ca, cb) + h).min(n);
-                if g1 <= g0 || self.column_hidden(Column::new(x_major, i, self.nb), g0, g1 - 1, zg)
+        // The groups' extents are computed four groups at a time, in vector lanes.
+        let first_block = i0 / BLOCK;
+        let groups = if i1 > i0 {
+            (i1 - 1) / BLOCK + 1 - first_block
+        } else {
+            0
+        };
+        for q in (0..groups).step_by(4) {
+            let start = ilanes(|k| (((first_block + q + k) * BLOCK).max(i0)) as i32);
+            let end = ilanes(|k| (((first_block + q + k + 1) * BLOCK).min(i1)) as i32);
+            let ta = lanes(|k| (mx(maj0, start[k] as f32) - maj0) * inv);
+            let tb = lanes(|k| (mn(maj1, end[k] as f32) - maj0) * inv);
+            let ca = lanes(|k| min0 + ta[k] * (min1 - min0));
+            let cb = lanes(|k| min0 + tb[k] * (min1 - min0));
+            let zg = lanes(|k| mn(z0 + ta[k] * dz, z0 + tb[k] * dz));
+            let g0 = lanes(|k| mn(ca[k], cb[k]) - h).map(floor_pos);
+            let g1 = lanes(|k| mx(ca[k], cb[k]) + h).map(|x| ceil_pos(x).min(n));
+            for k in 0..(groups - q).min(4) {
+                let (gs, ge) = (start[k] as usize, end[k] as usize);
+                if g1[k] <= g0[k]
+                    || self.column_hidden(
+                        Column::new(x_major, gs, self.stride),
+                        g0[k],
+                        g1[k] - 1,
+                        zg[k],
+                    )
                 {
-                    fi += (group_end - i) as f32;
-                    i = group_end;
                     continue;
                 }
-            }
-            if thin {
-                // The group's columns (at most BLOCK = 4), their parameters computed four
-                // lanes at once by the same arithmetic as below; then each column's fixed
-                // window (moved inside the tile at its far edge), all four samples at once.
-                // No culling test per column: the group passed one, and a sample that is
-                // opaque or behind the body refuses the blend anyway; the test would cost as
-                // much as the blend.
-                let fk = lanes(|k| fi + k as f32);
-                let lo = lanes(|k| mx(maj0, fk[k]));
-                let hi = lanes(|k| mn(maj1, fk[k] + 1.0));
-                let cov_maj = lanes(|k| hi[k] - lo[k]);
-                let t = lanes(|k| (0.5 * (lo[k] + hi[k]) - maj0) * inv);
-                let c = lanes(|k| min0 + t[k] * (min1 - min0));
-                let z = lanes(|k| z0 + t[k] * dz);
-                let rgb = [0, 1, 2].map(|ch| lanes(|k| c0[ch] + t[k] * dc[ch]));
-                for k in 0..group_end - i {
-                    if cov_maj[k] <= 0.0 {
-                        continue;
-                    }
-                    let col_i = i + k;
-                    let (y_lo, y_hi) = (c[k] - h, c[k] + h);
-                    let js = floor_pos(y_lo).min(n - WINDOW);
-                    self.blend_window(
-                        col_i * stride_maj + js * stride_min,
-                        stride_min,
-                        js,
-                        Column::new(x_major, col_i, self.nb),
-                        z[k],
-                        alpha * cov_maj[k],
-                        (y_lo, y_hi),
-                        &Px([rgb[0][k], rgb[1][k], rgb[2][k], -1.0]),
-                    );
+                let line = Line {
+                    x_major,
+                    maj0,
+                    maj1,
+                    min0,
+                    min1,
+                    inv,
+                    h,
+                    z0,
+                    dz,
+                    c0,
+                    dc,
+                };
+                if thin {
+                    self.thin_group(&line, gs, ge, alpha);
+                } else {
+                    self.wide_group(&line, gs, ge, alpha);
                 }
-                fi += (group_end - i) as f32;
-                i = group_end;
+            }
+        }
+    }
+
+    /// Draws columns `gs..ge` (at most BLOCK) of thin line `l`: the columns' parameters
+    /// computed four lanes at once by the same arithmetic as [`TileBuf::wide_group`], then each
+    /// column's fixed window (moved inside the tile at its far edge), all four samples at once.
+    /// No culling test per column: the group passed one, and a sample that is opaque or behind
+    /// the body refuses the blend anyway; the test would cost as much as the blend.
+    #[inline(always)]
+    fn thin_group(&mut self, l: &Line, gs: usize, ge: usize, alpha: f32) {
+        let n = self.n;
+        let (stride_maj, stride_min) = if l.x_major { (1, n) } else { (n, 1) };
+        let fi = gs as f32;
+        let fk = lanes(|k| fi + k as f32);
+        let lo = lanes(|k| mx(l.maj0, fk[k]));
+        let hi = lanes(|k| mn(l.maj1, fk[k] + 1.0));
+        let cov_maj = lanes(|k| hi[k] - lo[k]);
+        let t = lanes(|k| (0.5 * (lo[k] + hi[k]) - l.maj0) * l.inv);
+        let c = lanes(|k| l.min0 + t[k] * (l.min1 - l.min0));
+        let z = lanes(|k| l.z0 + t[k] * l.dz);
+        let rgb = [0, 1, 2].map(|ch| lanes(|k| l.c0[ch] + t[k] * l.dc[ch]));
+        for k in 0..ge - gs {
+            if cov_maj[k] <= 0.0 {
                 continue;
             }
-            let lo = mx(maj0, fi);
-            let hi = mn(maj1, fi + 1.0);
-            fi += 1.0;
-            let col_i = i;
-            i += 1;
+            let col_i = gs + k;
+            let (y_lo, y_hi) = (c[k] - l.h, c[k] + l.h);
+            let js = floor_pos(y_lo).min(n - WINDOW);
+            self.blend_window(
+                col_i * stride_maj + js * stride_min,
+                stride_min,
+                js,
+                Column::new(l.x_major, col_i, self.stride),
+                z[k],
+                alpha * cov_maj[k],
+                (y_lo, y_hi),
+                &Px([rgb[0][k], rgb[1][k], rgb[2][k], -1.0]),
+            );
+        }
+    }
+
+    /// Draws columns `gs..ge` of line `l`, however wide, column by column, each tested for
+    /// culling first, sample by sample.
+    #[inline(always)]
+    fn wide_group(&mut self, l: &Line, gs: usize, ge: usize, alpha: f32) {
+        let n = self.n;
+        let (stride_maj, stride_min) = if l.x_major { (1, n) } else { (n, 1) };
+        for col_i in gs..ge {
+            let fi = col_i as f32;
+            let lo = mx(l.maj0, fi);
+            let hi = mn(l.maj1, fi + 1.0);
             let cov_maj = hi - lo;
             if cov_maj <= 0.0 {
                 continue;
             }
-            let t = (0.5 * (lo + hi) - maj0) * inv;
-            let c = min0 + t * (min1 - min0);
-            let z = z0 + t * dz;
-            let (y_lo, y_hi) = (c - h, c + h);
+            let t = (0.5 * (lo + hi) - l.maj0) * l.inv;
+            let c = l.min0 + t * (l.min1 - l.min0);
+            let z = l.z0 + t * l.dz;
+            let (y_lo, y_hi) = (c - l.h, c + l.h);
             let j0 = floor_pos(y_lo);
-            let col = Column::new(x_major, col_i, self.nb);
+            let col = Column::new(l.x_major, col_i, self.stride);
             let rgb = Px([
-                c0[0] + t * dc[0],
-                c0[1] + t * dc[1],
-                c0[2] + t * dc[2],
+                l.c0[0] + t * l.dc[0],
+                l.c0[1] + t * l.dc[1],
+                l.c0[2] + t * l.dc[2],
                 -1.0,
             ]);
             let w0 = alpha * cov_maj;
@@ -410,7 +454,6 @@ impl TileBuf {
         self.block_alive[b] -= 1;
         if self.block_alive[b] == 0 {
             self.block_close[b] = f32::NEG_INFINITY;
-            self.close_super(b);
         }
     }
 }
@@ -445,12 +488,11 @@ fn cull_box(ox: i32, oy: i32, a: &ScreenVertex, b: &ScreenVertex, half: f32) -> 
     Some([mn(ax, bx) - r, hi0, mn(ay, by) - r, hi1, mn(a.z, b.z)])
 }
 
-/// A tile's culling depths, per block and per superblock.
+/// A tile's culling depths per block, rows padded to whole LANES (see [`TileBuf`]).
 struct Culling<'a> {
     nb: usize,
-    ns: usize,
+    stride: usize,
     block_close: &'a [f32],
-    super_close: &'a [f32],
 }
 
 impl Culling<'_> {
@@ -463,28 +505,59 @@ impl Culling<'_> {
         let bx1 = (floor_pos(x1) / BLOCK).min(last);
         let by0 = (floor_pos(y0) / BLOCK).min(last);
         let by1 = (floor_pos(y1) / BLOCK).min(last);
-        // Superblocks first: in dense hair most segments end here, after one or two tests.
-        // (Exclusive ranges and plain indexing: `..=` loops and slice folds cost several
-        // times more here, on a test made for every binned segment.)
-        let mut far = f32::NEG_INFINITY;
-        for sy in by0 / SUPER..by1 / SUPER + 1 {
-            let row = sy * self.ns;
-            for sx in bx0 / SUPER..bx1 / SUPER + 1 {
-                far = mx(far, self.super_close[row + sx]);
-            }
-        }
-        if z >= far {
-            return true;
-        }
-        let mut far = f32::NEG_INFINITY;
+        // Row by row, each row's blocks compared all at once into a bit mask: no loop with a
+        // data-dependent trip count per block, on a test made for every binned segment.
+        let want = (u32::MAX >> (31 - bx1)) & (u32::MAX << bx0);
         for by in by0..by1 + 1 {
-            let row = by * self.nb;
-            for bx in bx0..bx1 + 1 {
-                far = mx(far, self.block_close[row + bx]);
+            let row = &self.block_close[by * self.stride..(by + 1) * self.stride];
+            if row_hidden(row, z) & want != want {
+                return false;
             }
         }
-        z >= far
+        true
     }
+}
+
+/// Bit k set where depth `z` is at or behind `row[k]` (`row.len()` a multiple of LANES, at
+/// most 32).
+#[inline(always)]
+fn row_hidden(row: &[f32], z: f32) -> u32 {
+    let mut mask = 0;
+    for (k, chunk) in row.chunks_exact(LANES).enumerate() {
+        let chunk: &[f32; LANES] = chunk.try_into().expect("chunks_exact gives LANES");
+        mask |= chunk_hidden(chunk, z) << (k * LANES);
+    }
+    mask
+}
+
+/// [`row_hidden`] of one chunk: four compares and mask moves (SSE, part of every x86-64;
+/// written lane by lane, the compiler made a long chain of scalar compares and shifts).
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+fn chunk_hidden(chunk: &[f32; LANES], z: f32) -> u32 {
+    use std::arch::x86_64::{_mm_cmpge_ps, _mm_loadu_ps, _mm_movemask_ps, _mm_set1_ps};
+    let mut bits = 0;
+    for q in 0..LANES / 4 {
+        // SAFETY: SSE is in the x86-64 baseline; the load reads lanes 4q..4q+4 of `chunk`
+        // (unaligned loads allowed). `cmpge` is false for NaN, as `z >= c` is.
+        let m = unsafe {
+            let c = _mm_loadu_ps(chunk.as_ptr().add(4 * q));
+            _mm_movemask_ps(_mm_cmpge_ps(_mm_set1_ps(z), c))
+        };
+        bits |= (m as u32) << (4 * q);
+    }
+    bits
+}
+
+/// [`row_hidden`] of one chunk, lane by lane.
+#[cfg(not(target_arch = "x86_64"))]
+#[inline(always)]
+fn chunk_hidden(chunk: &[f32; LANES], z: f32) -> u32 {
+    let mut bits = 0;
+    for (l, &c) in chunk.iter().enumerate() {
+        bits |= ((z >= c) as u32) << l;
+    }
+    bits
 }
 
 /// A tile's body, cast before binning: its depth buffer and culling depths, the state from
@@ -500,13 +573,10 @@ pub(crate) struct BodyLayer {
     far: f32,
     ox: i32,
     oy: i32,
-    nb: usize,
-    ns: usize,
     body_seen: bool,
     zb: Vec<f32>,
     prim: Vec<u16>,
     block_close: Vec<f32>,
-    super_close: Vec<f32>,
 }
 
 /// Every tile's [`BodyLayer`], for binning.
@@ -549,19 +619,18 @@ impl TileBuf {
     ) {
         // Only the body part of the buffer: its samples are not used here.
         (self.n, self.ox, self.oy) = (n, ox, oy);
-        self.nb = n.div_ceil(BLOCK);
-        self.ns = self.nb.div_ceil(SUPER);
+        self.set_blocks(n);
         self.reset_body();
         self.cast_body(view, prims);
         self.close_blocks();
-        (layer.ox, layer.oy, layer.nb, layer.ns) = (ox, oy, self.nb, self.ns);
+        (layer.ox, layer.oy) = (ox, oy);
         layer.body_seen = self.body_seen;
         layer.zb.clone_from(&self.zb);
         layer.prim.clone_from(&self.prim);
         layer.block_close.clone_from(&self.block_close);
-        layer.super_close.clone_from(&self.super_close);
+        // The padding is NEG_INFINITY: it never raises the maximum.
         layer.far = self
-            .super_close
+            .block_close
             .iter()
             .fold(f32::NEG_INFINITY, |m, &c| mx(m, c));
     }
@@ -573,14 +642,36 @@ impl TileBuf {
         let m = n * n;
         self.zb.resize(m, 0.0);
         self.prim.resize(m, 0);
-        self.block_close.resize(self.nb * self.nb, 0.0);
-        self.super_close.resize(self.ns * self.ns, 0.0);
+        self.block_close.resize(self.nb * self.stride, 0.0);
         self.body_seen = layer.body_seen;
         self.zb.copy_from_slice(&layer.zb);
         self.prim.copy_from_slice(&layer.prim);
         self.block_close.copy_from_slice(&layer.block_close);
-        self.super_close.copy_from_slice(&layer.super_close);
     }
+}
+
+/// A segment as the tile pass draws it: walked along its major axis from `maj0` to `maj1`
+/// (tile-relative samples; `inv` = 1 / (maj1 − maj0)), its centre line going from `min0` to
+/// `min1` across, half-width `h` across the columns, depth `z0 + t·dz` and colour
+/// `c0 + t·dc` at parameter t.
+struct Line {
+    x_major: bool,
+    maj0: f32,
+    maj1: f32,
+    min0: f32,
+    min1: f32,
+    inv: f32,
+    h: f32,
+    z0: f32,
+    dz: f32,
+    c0: [f32; 3],
+    dc: [f32; 3],
+}
+
+/// [`lanes`] of integers.
+#[inline(always)]
+fn ilanes(f: impl Fn(usize) -> i32) -> [i32; 4] {
+    [f(0), f(1), f(2), f(3)]
 }
 
 /// Four lanes of a value, computed together: written lane by lane without branches, so that
@@ -706,7 +797,6 @@ mod tests {
         from_layer.reset_with(64, &layer);
         assert_eq!(from_layer.zb, direct.zb);
         assert_eq!(from_layer.block_close, direct.block_close);
-        assert_eq!(from_layer.super_close, direct.super_close);
         assert_eq!((from_layer.ox, from_layer.oy), (0, 0));
         assert!(from_layer.px.iter().all(|p| p.0 == [0.0, 0.0, 0.0, 1.0]));
     }
