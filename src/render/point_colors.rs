@@ -25,7 +25,7 @@ const EXP_MAX: i32 = 31;
 
 /// Packs a linear colour as RGB9E5. Negative values and NaN become 0; values above 65,408
 /// (the format's largest) are clamped. A pure function: the same colour always gives the
-/// same word. The scalar reference of [`pack4`], which the renderer uses.
+/// same word. The scalar reference of [`pack_lanes`], which the renderer uses.
 #[cfg_attr(not(test), allow(dead_code))]
 pub(crate) fn pack(c: [f32; 3]) -> u32 {
     let max_value = ((1 << MANTISSA) - 1) as f32 / (1 << MANTISSA) as f32
@@ -48,27 +48,27 @@ pub(crate) fn pack(c: [f32; 3]) -> u32 {
     q(r) | (q(g) << MANTISSA) | (q(b) << (2 * MANTISSA)) | ((e as u32) << (3 * MANTISSA))
 }
 
-/// [`pack`] of four colours (`c[channel][lane]`), lane by lane in 32-bit integer and float
-/// operations only, so that it compiles to SSE2 vector code. The same words as [`pack`].
+/// [`pack`] of N colours (`c[channel][lane]`), lane by lane in 32-bit integer and float
+/// operations only, so that it compiles to vector code. The same words as [`pack`].
 #[inline(always)]
-fn pack4(c: [V4; 3]) -> [u32; 4] {
+fn pack_lanes<const N: usize>(c: [[f32; N]; 3]) -> [u32; N] {
     use super::raster::{mn, mx};
     let max_value = ((1 << MANTISSA) - 1) as f32 / (1 << MANTISSA) as f32
         * f32::from_bits(((EXP_MAX - BIAS + 127) as u32) << 23);
-    let cl = |x: V4| lanes(|l| mn(mx(x[l], 0.0), max_value));
+    let cl = |x: [f32; N]| x.map(|v| mn(mx(v, 0.0), max_value));
     let (r, g, b) = (cl(c[0]), cl(c[1]), cl(c[2]));
-    let m = lanes(|l| mx(mx(r[l], g[l]), b[l]));
+    let m: [f32; N] = std::array::from_fn(|l| mx(mx(r[l], g[l]), b[l]));
     let pow2 = |k: i32| f32::from_bits(((k + 127) as u32) << 23);
-    let mut out = [0u32; 4];
-    let mut e = [0i32; 4];
-    for l in 0..4 {
+    let mut out = [0u32; N];
+    let mut e = [0i32; N];
+    for l in 0..N {
         let log2 = ((m[l].to_bits() >> 23) as i32 - 127).max(-BIAS - 1);
         let e0 = log2 + 1 + BIAS;
         // SAFETY: m ≤ max_value, so m / step + 0.5 < 2^(MANTISSA + 1), in range.
         let top = unsafe { (m[l] * pow2(-(e0 - BIAS - MANTISSA)) + 0.5).to_int_unchecked::<i32>() };
         e[l] = e0 + (top >= 1 << MANTISSA) as i32;
     }
-    for l in 0..4 {
+    for l in 0..N {
         let inv = pow2(-(e[l] - BIAS - MANTISSA));
         // SAFETY: every channel ≤ m, so each quotient is below 2^(MANTISSA + 1).
         let q = |x: f32| {
@@ -108,22 +108,25 @@ pub(crate) struct PointShader<'a> {
     pub kappa: f32,
 }
 
-/// Four lanes of a value, shaded together: written lane by lane, without branches or calls,
-/// so that the compiler turns each line into one SSE instruction.
-type V4 = [f32; 4];
+/// Points shaded together, one per vector lane (eight: one AVX register of floats).
+const LANES: usize = 8;
+
+/// LANES lanes of a value, shaded together: written lane by lane, without branches or calls,
+/// so that the compiler turns each line into one vector instruction.
+type V = [f32; LANES];
 
 #[inline(always)]
-fn lanes(f: impl Fn(usize) -> f32) -> V4 {
-    [f(0), f(1), f(2), f(3)]
+fn lanes(f: impl Fn(usize) -> f32) -> V {
+    std::array::from_fn(f)
 }
 
 impl PointShader<'_> {
     /// Shades strand `s`, whose points `pts` are the frame's points `first..first + len`,
     /// into `out` (one word per point). The tangent at a point is the direction from its
-    /// previous to its next point (one-sided at the ends). Four points at a time; a last
+    /// previous to its next point (one-sided at the ends). LANES points at a time; a last
     /// group of fewer repeats the strand's last point in the spare lanes and drops them.
+    /// Groups of points none of which is `needed` are skipped.
     #[inline(always)]
-    /// Groups of four points none of which is `needed` are skipped.
     pub fn strand(&self, s: usize, pts: &[[f32; 3]], first: usize, needed: &[u8], out: &mut [u32]) {
         let Some(last) = pts.len().checked_sub(1) else {
             return;
@@ -132,14 +135,17 @@ impl PointShader<'_> {
         if let Some(c) = self.strand_colors.get(s) {
             shader.color = *c;
         }
-        for k0 in (0..pts.len()).step_by(4) {
-            if needed[k0..(k0 + 4).min(pts.len())].iter().all(|&n| n == 0) {
+        for k0 in (0..pts.len()).step_by(LANES) {
+            if needed[k0..(k0 + LANES).min(pts.len())]
+                .iter()
+                .all(|&n| n == 0)
+            {
                 continue;
             }
-            let mut pt = [[0.0f32; 4]; 3];
-            let mut d = [[0.0f32; 4]; 3];
-            let mut lq = [[0.0f32; 4]; 3];
-            for l in 0..4 {
+            let mut pt = [[0.0f32; LANES]; 3];
+            let mut d = [[0.0f32; LANES]; 3];
+            let mut lq = [[0.0f32; LANES]; 3];
+            for l in 0..LANES {
                 let k = (k0 + l).min(last);
                 let (prev, next) = (pts[k.saturating_sub(1)], pts[(k + 1).min(last)]);
                 let q = self.maps.point(first + k);
@@ -149,8 +155,8 @@ impl PointShader<'_> {
                     lq[a][l] = q[a];
                 }
             }
-            let omega = self.maps.opacity4(lq, 1.0);
-            let words = self.shade4(&shader, pt, d, omega);
+            let omega = self.maps.opacity_lanes(lq, 1.0);
+            let words = self.shade_lanes(&shader, pt, d, omega);
             for (o, &w) in out[k0..].iter_mut().zip(&words) {
                 *o = w;
             }
@@ -160,7 +166,7 @@ impl PointShader<'_> {
     /// Kajiya-Kay ([`HairShader::shade`], lane by lane) at points `pt` with tangent
     /// directions `d` (not unit) and opacities `omega` in front of them, packed.
     #[inline(always)]
-    fn shade4(&self, shader: &HairShader, pt: [V4; 3], d: [V4; 3], omega: V4) -> [u32; 4] {
+    fn shade_lanes(&self, shader: &HairShader, pt: [V; 3], d: [V; 3], omega: V) -> [u32; LANES] {
         use super::shading::{exp, exp2, log2};
         // Unit tangent, or +z for a zero-length one (as `normalize`).
         let len2 = lanes(|l| d[0][l] * d[0][l] + d[1][l] * d[1][l] + d[2][l] * d[2][l]);
@@ -182,7 +188,7 @@ impl PointShader<'_> {
         let te = lanes(|l| (t[0][l] * e[0][l] + t[1][l] * e[1][l] + t[2][l] * e[2][l]) * elen[l]);
         let li = shader.light;
         let tl = lanes(|l| t[0][l] * li[0] + t[1][l] * li[1] + t[2][l] * li[2]);
-        let sin = |c: V4| lanes(|l| (1.0 - c[l] * c[l]).max(0.0).sqrt());
+        let sin = |c: V| lanes(|l| (1.0 - c[l] * c[l]).max(0.0).sqrt());
         let (sl, se) = (sin(tl), sin(te));
         let c = lanes(|l| sl[l] * se[l] - tl[l] * te[l]);
         let spec = lanes(|l| {
@@ -198,7 +204,7 @@ impl PointShader<'_> {
         let dif = lanes(|l| k + trans[l] * shader.diffuse * sl[l]);
         let sp = lanes(|l| trans[l] * shader.specular * spec[l]);
         let h = |ch: f32| lanes(|l| ch * dif[l] + sp[l] * (0.5 + 0.5 * ch));
-        pack4([h(col[0]), h(col[1]), h(col[2])])
+        pack_lanes([h(col[0]), h(col[1]), h(col[2])])
     }
 }
 
@@ -232,7 +238,7 @@ mod tests {
             [0.999, 1.0, 1.001],
         ];
         let lanes4 = [0, 1, 2].map(|k| [cs[0][k], cs[1][k], cs[2][k], cs[3][k]]);
-        assert_eq!(pack4(lanes4), cs.map(pack));
+        assert_eq!(pack_lanes(lanes4), cs.map(pack));
         assert_eq!(unpack(pack([-1.0, f32::NAN, 0.5]))[..2], [0.0, 0.0]);
         // Beyond the format's range: clamped, not wrapped.
         let big = unpack(pack([1e9, 1.0, 0.0]));

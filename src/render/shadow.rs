@@ -330,50 +330,63 @@ impl ShadowMaps {
         top * (1.0 - fy) + bottom * fy
     }
 
-    /// [`ShadowMaps::opacity`] at four light-space points (`q[axis][lane]`) at once: the
+    /// [`ShadowMaps::opacity`] at N light-space points (`q[axis][lane]`) at once: the
     /// same interpolation, without branches, for the per-point shading.
     #[inline(always)]
-    pub fn opacity4(&self, q: [[f32; 4]; 3], bias: f32) -> [f32; 4] {
+    pub fn opacity_lanes<const N: usize>(&self, q: [[f32; N]; 3], bias: f32) -> [f32; N] {
         use super::raster::{mn, mx};
+        use std::array::from_fn;
         let s = self.size;
         let max = (s - 2) as f32;
-        let mut out = [0.0f32; 4];
-        for l in 0..4 {
-            // Eq. 1's two maps: f between map ⌊f⌋ and ⌊f⌋ + 1; in front of map 0, map "−1"
-            // (which holds nothing) and map 0; beyond the last map, the last map alone.
-            // (`mx`/`mn` send NaN to the bound, so the conversions below are in range.)
-            let f = mn(
+        // The weights and texel addresses lane by lane (vector code), then the loads lane
+        // after lane, then the interpolation lane by lane again.
+        // Eq. 1's two maps: f between map ⌊f⌋ and ⌊f⌋ + 1; in front of map 0, map "−1"
+        // (which holds nothing) and map 0; beyond the last map, the last map alone.
+        // (`mx`/`mn` send NaN to the bound, so the conversions below are in range.)
+        let f: [f32; N] = from_fn(|l| {
+            mn(
                 mx((q[2][l] - self.z0) * self.inv_dz - bias, -1.0),
                 (MAPS - 1) as f32,
-            );
-            // SAFETY: f + 1 is in [0, MAPS], and x, y below in [0, size − 2].
-            let fl = (unsafe { (f + 1.0).to_int_unchecked::<i32>() } - 1).min(MAPS as i32 - 2);
-            let w1 = f - fl as f32;
-            // Map ⌊f⌋ is −1 in front of map 0: it gets no weight, and reads map 0.
-            let w0 = if fl >= 0 { 1.0 - w1 } else { 0.0 };
-            let i = (fl.max(0) as usize) & (MAPS - 1);
-            let i1 = (if fl >= 0 { i + 1 } else { 0 }) & (MAPS - 1);
-            let x = mn(mx(q[0][l] - 0.5, 0.0), max);
-            let y = mn(mx(q[1][l] - 0.5, 0.0), max);
-            let (xi, yi) = unsafe {
-                (
-                    x.to_int_unchecked::<i32>() as usize,
-                    y.to_int_unchecked::<i32>() as usize,
-                )
-            };
-            let (fx, fy) = (x - xi as f32, y - yi as f32);
-            // The 2×2 texels, each MAPS opacities.
-            let at = (yi * s + xi) * MAPS;
+            )
+        });
+        // SAFETY: f + 1 is in [0, MAPS], and x, y below in [0, size − 2].
+        let fl: [i32; N] = from_fn(|l| {
+            (unsafe { (f[l] + 1.0).to_int_unchecked::<i32>() } - 1).min(MAPS as i32 - 2)
+        });
+        let w1: [f32; N] = from_fn(|l| f[l] - fl[l] as f32);
+        // Map ⌊f⌋ is −1 in front of map 0: it gets no weight, and reads map 0.
+        let w0: [f32; N] = from_fn(|l| if fl[l] >= 0 { 1.0 - w1[l] } else { 0.0 });
+        let i: [usize; N] = from_fn(|l| (fl[l].max(0) as usize) & (MAPS - 1));
+        let i1: [usize; N] = from_fn(|l| (if fl[l] >= 0 { i[l] + 1 } else { 0 }) & (MAPS - 1));
+        let x: [f32; N] = from_fn(|l| mn(mx(q[0][l] - 0.5, 0.0), max));
+        let y: [f32; N] = from_fn(|l| mn(mx(q[1][l] - 0.5, 0.0), max));
+        let xi: [i32; N] = from_fn(|l| unsafe { x[l].to_int_unchecked::<i32>() });
+        let yi: [i32; N] = from_fn(|l| unsafe { y[l].to_int_unchecked::<i32>() });
+        let fx: [f32; N] = from_fn(|l| x[l] - xi[l] as f32);
+        let fy: [f32; N] = from_fn(|l| y[l] - yi[l] as f32);
+        // The 2×2 texels, each MAPS opacities, at the two maps.
+        let mut t = [[[0.0f32; N]; 2]; 4];
+        for l in 0..N {
+            let at = (yi[l] as usize * s + xi[l] as usize) * MAPS;
             let (top, bottom) = (
                 &self.omega[at..at + 2 * MAPS],
                 &self.omega[at + s * MAPS..at + (s + 2) * MAPS],
             );
-            let pair = |t: &[f32], k: usize| w0 * t[k + i] + w1 * t[k + i1];
-            let upper = pair(top, 0) * (1.0 - fx) + pair(top, MAPS) * fx;
-            let lower = pair(bottom, 0) * (1.0 - fx) + pair(bottom, MAPS) * fx;
-            out[l] = upper * (1.0 - fy) + lower * fy;
+            for (c, (row, k)) in [(top, 0), (top, MAPS), (bottom, 0), (bottom, MAPS)]
+                .into_iter()
+                .enumerate()
+            {
+                t[c][0][l] = row[k + i[l]];
+                t[c][1][l] = row[k + i1[l]];
+            }
         }
-        out
+        let pair = |c: usize| -> [f32; N] { from_fn(|l| w0[l] * t[c][0][l] + w1[l] * t[c][1][l]) };
+        let (p0, p1, p2, p3) = (pair(0), pair(1), pair(2), pair(3));
+        from_fn(|l| {
+            let upper = p0[l] * (1.0 - fx[l]) + p1[l] * fx[l];
+            let lower = p2[l] * (1.0 - fx[l]) + p3[l] * fx[l];
+            upper * (1.0 - fy[l]) + lower * fy[l]
+        })
     }
 
     /// The 16 opacities Ω_0..Ω_15 at texel (x, y) (for tests).
