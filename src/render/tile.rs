@@ -411,9 +411,12 @@ impl TileBuf {
         (y_lo, y_hi): (f32, f32),
         rgb: &Px,
     ) {
-        let idx: [usize; WINDOW] = std::array::from_fn(|k| at + k * stride);
-        let v: [[f32; 4]; WINDOW] = idx.map(|i| self.px[i].0);
-        let zb: [f32; WINDOW] = idx.map(|i| self.zb[i]);
+        // One bounds check per window: the samples are `k · stride` into these slices.
+        let span = (WINDOW - 1) * stride + 1;
+        let px = &mut self.px[at..at + span];
+        let zbs = &self.zb[at..at + span];
+        let v: [[f32; 4]; WINDOW] = std::array::from_fn(|k| px[k * stride].0);
+        let zb: [f32; WINDOW] = std::array::from_fn(|k| zbs[k * stride]);
         let fj0 = js as f32;
         let mut new = [[0.0f32; 4]; WINDOW];
         let mut live = [false; WINDOW];
@@ -435,7 +438,7 @@ impl TileBuf {
         }
         let mut turned = false;
         for k in 0..WINDOW {
-            self.px[idx[k]].0 = new[k];
+            px[k * stride].0 = new[k];
             turned |= live[k] & (new[k][3] < OPAQUE);
         }
         if turned {
