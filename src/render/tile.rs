@@ -193,8 +193,18 @@ impl TileBuf {
     /// at depth `z`.
     #[inline(always)]
     fn column_hidden(&self, at: Column, j0: usize, j1: usize, z: f32) -> bool {
+        let (b0, b1) = (j0 / BLOCK, j1 / BLOCK);
+        if b1 - b0 < 2 {
+            // One or two blocks (nearly always): both read, with no loop whose trip count
+            // the processor would have to guess.
+            let far = mx(
+                self.block_close[at.base + b0 * at.step],
+                self.block_close[at.base + b1 * at.step],
+            );
+            return z >= far;
+        }
         let mut far = f32::NEG_INFINITY;
-        for jb in j0 / BLOCK..j1 / BLOCK + 1 {
+        for jb in b0..b1 + 1 {
             far = mx(far, self.block_close[at.base + jb * at.step]);
         }
         z >= far
@@ -511,13 +521,18 @@ impl Culling<'_> {
         // Row by row, each row's blocks compared all at once into a bit mask: no loop with a
         // data-dependent trip count per block, on a test made for every binned segment.
         let want = (u32::MAX >> (31 - bx1)) & (u32::MAX << bx0);
-        for by in by0..by1 + 1 {
-            let row = &self.block_close[by * self.stride..(by + 1) * self.stride];
-            if row_hidden(row, z) & want != want {
-                return false;
-            }
+        let row = |by: usize| {
+            let r = &self.block_close[by * self.stride..(by + 1) * self.stride];
+            row_hidden(r, z)
+        };
+        if by1 - by0 < 3 {
+            // Up to three rows (nearly always): all three tested (rows repeated when there
+            // are fewer) and combined, with no loop or early exit whose outcome the processor
+            // would have to guess.
+            let mid = (by0 + 1).min(by1);
+            return row(by0) & row(mid) & row(by1) & want == want;
         }
-        true
+        (by0..by1 + 1).all(|by| row(by) & want == want)
     }
 }
 
