@@ -10,6 +10,9 @@ use super::shading::LUT_SIZE;
 use super::shadow::ShadowMaps;
 use super::tile::TileBuf;
 
+/// No primitive (primitive numbers are `u16`).
+const NONE: u32 = u32::MAX;
+
 /// What the resolve needs of the frame.
 pub(crate) struct Resolve<'a> {
     pub view: &'a View,
@@ -27,6 +30,7 @@ pub(crate) struct Resolve<'a> {
 
 impl Resolve<'_> {
     /// The lit colour of the body at sample (x, y) (global), hit at view depth `t` on prim `k`.
+    #[inline(never)]
     fn body_at(&self, x: f32, y: f32, t: f32, k: usize) -> [f32; 3] {
         let d = self.view.ray(x, y);
         let p = add(self.view.eye, scale(d, t));
@@ -50,14 +54,30 @@ impl Resolve<'_> {
     /// Resolves `buf` into `out`, the tile's TILE² linear pixels (row-major, 3 floats each):
     /// the body or background behind the hair, box-filtered over each pixel's samples.
     pub fn tile(&self, buf: &TileBuf, ss: usize, out: &mut [f32]) {
+        // The supersampling factor as a constant where it can be, so that each pixel's
+        // samples are visited by unrolled code, without loop counters.
+        match ss {
+            2 => self.tile_ss(buf, out, || 2),
+            3 => self.tile_ss(buf, out, || 3),
+            4 => self.tile_ss(buf, out, || 4),
+            _ => self.tile_ss(buf, out, || ss),
+        }
+    }
+
+    /// [`Resolve::tile`] at supersampling factor `ss()`.
+    #[inline(always)]
+    fn tile_ss(&self, buf: &TileBuf, out: &mut [f32], ss: impl Fn() -> usize) {
+        let ss = ss();
         let n = buf.n;
         let norm = 1.0 / (ss * ss) as f32;
         for py in 0..TILE {
             for px in 0..TILE {
                 let mut acc = [0.0f32; 3];
                 // The body is shaded once per pixel and primitive (its first visible sample):
-                // its edges keep every sample's coverage, its shading varies slowly.
-                let mut shaded: Option<(u16, [f32; 3])> = None;
+                // its edges keep every sample's coverage, its shading varies slowly. (A plain
+                // primitive number and colour, not an `Option` of both: the compiler spilled
+                // that in pieces and reloaded it whole, a stall at every sample.)
+                let (mut shaded_prim, mut shaded) = (NONE, [0.0f32; 3]);
                 for sy in 0..ss {
                     let j = py * ss + sy;
                     for sx in 0..ss {
@@ -67,20 +87,17 @@ impl Resolve<'_> {
                         let mut c = [r, g, b];
                         if tr >= OPAQUE {
                             let base = if buf.zb[at].is_finite() {
-                                let k = buf.prim[at];
-                                match shaded {
-                                    Some((pk, c)) if pk == k => c,
-                                    _ => {
-                                        let c = self.body_at(
-                                            (buf.ox + i as i32) as f32 + 0.5,
-                                            (buf.oy + j as i32) as f32 + 0.5,
-                                            buf.zb[at],
-                                            k as usize,
-                                        );
-                                        shaded = Some((k, c));
-                                        c
-                                    }
+                                let k = buf.prim[at] as u32;
+                                if k != shaded_prim {
+                                    shaded = self.body_at(
+                                        (buf.ox + i as i32) as f32 + 0.5,
+                                        (buf.oy + j as i32) as f32 + 0.5,
+                                        buf.zb[at],
+                                        k as usize,
+                                    );
+                                    shaded_prim = k;
                                 }
+                                shaded
                             } else {
                                 self.background
                             };
