@@ -406,11 +406,118 @@ impl TileBuf {
 
     /// [`TileBuf::blend`] into the WINDOW samples `at + k·stride` (`k` = 0..WINDOW), which are
     /// samples `js + k` of column `col`, of a line covering `y_lo..y_hi` across the column:
-    /// the same arithmetic, lane by lane without branches (the rare sample that turns opaque
-    /// is counted afterwards).
+    /// the same arithmetic, all four samples at once without branches (the rare sample that
+    /// turns opaque is counted afterwards).
     #[allow(clippy::too_many_arguments)]
     #[inline(always)]
     fn blend_window(
+        &mut self,
+        at: usize,
+        stride: usize,
+        js: usize,
+        col: Column,
+        z: f32,
+        w0: f32,
+        span: (f32, f32),
+        rgb: &Px,
+    ) {
+        #[cfg(target_arch = "x86_64")]
+        {
+            let turned = self.blend_window_sse(at, stride, js, z, w0, span, rgb);
+            if turned != 0 {
+                for k in 0..WINDOW {
+                    if turned & (1 << k) != 0 {
+                        self.opaque(col.block(js + k));
+                    }
+                }
+            }
+        }
+        #[cfg(not(target_arch = "x86_64"))]
+        self.blend_window_portable(at, stride, js, col, z, w0, span, rgb);
+    }
+
+    /// The blend of [`TileBuf::blend_window`] in SSE registers, one sample's colour and
+    /// transmittance per register and the four samples' transmittances, coverages and weights
+    /// in one: the operations of [`TileBuf::blend`] in the same order (no fused multiply-add),
+    /// so the same bits. Returns the mask of the samples that turned opaque. (Written lane by
+    /// lane, the compiler moved each value in and out of vector registers one lane at a time.)
+    #[cfg(target_arch = "x86_64")]
+    #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
+    fn blend_window_sse(
+        &mut self,
+        at: usize,
+        stride: usize,
+        js: usize,
+        z: f32,
+        w0: f32,
+        (y_lo, y_hi): (f32, f32),
+        rgb: &Px,
+    ) -> u32 {
+        use std::arch::x86_64::*;
+        // One bounds check per window: the samples are `k · stride` into these slices.
+        let span = (WINDOW - 1) * stride + 1;
+        let px = &mut self.px[at..at + span];
+        let zbs = &self.zb[at..at + span];
+        let (p0, p1, p2, p3) = (0, stride, 2 * stride, 3 * stride);
+        let fj0 = js as i32 as f32;
+        // SAFETY: SSE and SSE2 are part of x86-64. The loads and stores are of `Px`, 16-byte
+        // aligned records of four floats, at indices within `px` (bounds-checked by the
+        // indexing); `_mm_min_ps(a, b)` is `a < b ? a : b` and `_mm_max_ps(a, b)`
+        // `a > b ? a : b`, as `mn` and `mx`.
+        unsafe {
+            let v = [
+                _mm_load_ps(px[p0].0.as_ptr()),
+                _mm_load_ps(px[p1].0.as_ptr()),
+                _mm_load_ps(px[p2].0.as_ptr()),
+                _mm_load_ps(px[p3].0.as_ptr()),
+            ];
+            // Lane k: sample k's transmittance (lane 3 of its record).
+            let tr = _mm_movehl_ps(_mm_unpackhi_ps(v[2], v[3]), _mm_unpackhi_ps(v[0], v[1]));
+            let zb = _mm_setr_ps(zbs[p0], zbs[p1], zbs[p2], zbs[p3]);
+            let fj = _mm_add_ps(_mm_set1_ps(fj0), _mm_setr_ps(0.0, 1.0, 2.0, 3.0));
+            let top = _mm_min_ps(_mm_set1_ps(y_hi), _mm_add_ps(fj, _mm_set1_ps(1.0)));
+            let cov = _mm_max_ps(
+                _mm_sub_ps(top, _mm_max_ps(_mm_set1_ps(y_lo), fj)),
+                _mm_setzero_ps(),
+            );
+            let opaque = _mm_set1_ps(OPAQUE);
+            let live = _mm_and_ps(_mm_cmpge_ps(tr, opaque), _mm_cmplt_ps(_mm_set1_ps(z), zb));
+            // A refused sample gets weight +0: adding 0 leaves every channel as it was.
+            let w = _mm_and_ps(live, _mm_mul_ps(_mm_mul_ps(tr, _mm_set1_ps(w0)), cov));
+            let c = _mm_load_ps(rgb.0.as_ptr());
+            let blend = |v: __m128, wk: __m128| _mm_add_ps(v, _mm_mul_ps(wk, c));
+            _mm_store_ps(
+                px[p0].0.as_mut_ptr(),
+                blend(v[0], _mm_shuffle_ps::<0x00>(w, w)),
+            );
+            _mm_store_ps(
+                px[p1].0.as_mut_ptr(),
+                blend(v[1], _mm_shuffle_ps::<0x55>(w, w)),
+            );
+            _mm_store_ps(
+                px[p2].0.as_mut_ptr(),
+                blend(v[2], _mm_shuffle_ps::<0xaa>(w, w)),
+            );
+            _mm_store_ps(
+                px[p3].0.as_mut_ptr(),
+                blend(v[3], _mm_shuffle_ps::<0xff>(w, w)),
+            );
+            // The new transmittances, as lane 3 of each blend computed them.
+            let new_tr = _mm_add_ps(tr, _mm_mul_ps(w, _mm_set1_ps(rgb.0[3])));
+            _mm_movemask_ps(_mm_and_ps(live, _mm_cmplt_ps(new_tr, opaque))) as u32
+        }
+    }
+
+    /// [`TileBuf::blend_window`] written lane by lane, for processors without SSE.
+    /// [`TileBuf::blend`] into the WINDOW samples `at + k·stride` (`k` = 0..WINDOW), which are
+    /// samples `js + k` of column `col`, of a line covering `y_lo..y_hi` across the column:
+    /// the same arithmetic, lane by lane without branches (the rare sample that turns opaque
+    /// is counted afterwards).
+    #[allow(clippy::too_many_arguments)]
+    #[cfg_attr(target_arch = "x86_64", allow(dead_code))]
+    #[inline(always)]
+    fn blend_window_portable(
         &mut self,
         at: usize,
         stride: usize,
