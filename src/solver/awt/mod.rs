@@ -22,7 +22,7 @@ mod step;
 
 pub use slots::{Segments, Slots};
 
-use std::sync::Arc;
+use std::sync::{Arc, OnceLock};
 
 use nalgebra::Vector3;
 
@@ -97,6 +97,12 @@ pub struct Simulation {
     spheres: Vec<collide::BodySphere>,
     dyn_scratch: dynamics::Scratch,
     adapt_scratch: forest::AdaptScratch,
+    /// Per finest node, its rest tangent as [`forest::min_rotation`] normalises it, computed
+    /// once (the model does not change): [`Simulation::strand_points`] runs for every strand
+    /// point of every rendered frame, and these two square roots and six divisions were a
+    /// third of its time. Kept with the model they were computed from, and used only while
+    /// `model` is still that one.
+    rest_units: OnceLock<(Arc<HairModel>, Vec<Vector3<f64>>)>,
 }
 
 impl Simulation {
@@ -138,6 +144,7 @@ impl Simulation {
             spheres: Vec::new(),
             dyn_scratch: dynamics::Scratch::default(),
             adapt_scratch,
+            rest_units: OnceLock::new(),
         };
         sim.gather();
         sim.settle();
@@ -274,6 +281,13 @@ impl Simulation {
         let f = m.strands.finest_gc[s] as usize;
         let fin = m.level_count() - 1;
         let pos = &self.forest.state[fin].pos;
+        let (from, units) = self.rest_units.get_or_init(|| {
+            let units = (0..m.nodes_on_level(fin))
+                .map(|node| m.rest_tangent(fin, node / k, node % k).normalize())
+                .collect();
+            (self.model.clone(), units)
+        });
+        let cached = Arc::ptr_eq(from, &self.model);
         for i in 0..k {
             let x = pos[f * k + i];
             let t_now = if i == 0 {
@@ -281,8 +295,12 @@ impl Simulation {
             } else {
                 x - pos[f * k + i - 1]
             };
-            let t_ref = m.rest_tangent(fin, f, i);
-            let r = forest::min_rotation(&t_ref, &t_now);
+            // The same rotation as `min_rotation(&m.rest_tangent(fin, f, i), &t_now)`.
+            let r = if cached {
+                forest::min_rotation_from_unit(&units[f * k + i], &t_now)
+            } else {
+                forest::min_rotation(&m.rest_tangent(fin, f, i), &t_now)
+            };
             out.push(x + r * m.strands.offset[s * k + i]);
         }
     }

@@ -78,7 +78,13 @@ impl AdaptScratch {
 
 /// The smallest rotation taking direction `from` to direction `to` (both non-zero).
 pub fn min_rotation(from: &Vector3<f64>, to: &Vector3<f64>) -> Matrix3<f64> {
-    let a = from.normalize();
+    min_rotation_from_unit(&from.normalize(), to)
+}
+
+/// [`min_rotation`] from `a`, the direction `from` already normalised (`from.normalize()`,
+/// bit for bit the vector `min_rotation` would compute).
+pub fn min_rotation_from_unit(a: &Vector3<f64>, to: &Vector3<f64>) -> Matrix3<f64> {
+    let a = *a;
     let b = to.normalize();
     let c = a.dot(&b);
     let v = a.cross(&b);
