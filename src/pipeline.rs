@@ -112,14 +112,15 @@ pub fn catmull_rom(p: &[nalgebra::Vector3<f64>], sub: usize, out: &mut Vec<[f32;
         } else {
             p[n - 1] * 2.0 - p[n - 2]
         };
+        // The span's polynomial coefficients, computed once per span (the same expressions,
+        // so the same values, as written inline in the sum below).
+        let (c0, c1) = (p1 * 2.0, p2 - p0);
+        let c2 = p0 * 2.0 - p1 * 5.0 + p2 * 4.0 - p3;
+        let c3 = p1 * 3.0 - p0 - p2 * 3.0 + p3;
         for j in 0..sub {
             let t = j as f64 / sub as f64;
             let (t2, t3) = (t * t, t * t * t);
-            let v = (p1 * 2.0
-                + (p2 - p0) * t
-                + (p0 * 2.0 - p1 * 5.0 + p2 * 4.0 - p3) * t2
-                + (p1 * 3.0 - p0 - p2 * 3.0 + p3) * t3)
-                * 0.5;
+            let v = (c0 + c1 * t + c2 * t2 + c3 * t3) * 0.5;
             out.push(to32(v));
         }
     }
@@ -244,6 +245,41 @@ pub fn fill_stats(frame: &mut Frame, params: &crate::style::SimParams) {
 mod tests {
     use super::*;
     use nalgebra::Vector3;
+
+    #[test]
+    fn catmull_rom_is_the_textbook_polynomial_bit_for_bit() {
+        // The coefficients are hoisted out of the per-point loop; every point must still be
+        // ½(2p1 + (p2 − p0)t + (2p0 − 5p1 + 4p2 − p3)t² + (3p1 − p0 − 3p2 + p3)t³) exactly.
+        let p: Vec<Vector3<f64>> = (0..7)
+            .map(|i| {
+                let x = i as f64;
+                Vector3::new(0.31 * x, (1.7 * x).sin() * 0.2, (0.9 * x).cos() * 0.05)
+            })
+            .collect();
+        let sub = 5;
+        let mut out = Vec::new();
+        catmull_rom(&p, sub, &mut out);
+        let n = p.len();
+        for i in 0..n - 1 {
+            let p0 = if i == 0 { p[0] * 2.0 - p[1] } else { p[i - 1] };
+            let (p1, p2) = (p[i], p[i + 1]);
+            let p3 = if i + 2 < n {
+                p[i + 2]
+            } else {
+                p[n - 1] * 2.0 - p[n - 2]
+            };
+            for j in 0..sub {
+                let t = j as f64 / sub as f64;
+                let (t2, t3) = (t * t, t * t * t);
+                let v = (p1 * 2.0
+                    + (p2 - p0) * t
+                    + (p0 * 2.0 - p1 * 5.0 + p2 * 4.0 - p3) * t2
+                    + (p1 * 3.0 - p0 - p2 * 3.0 + p3) * t3)
+                    * 0.5;
+                assert_eq!(out[i * sub + j], [v.x as f32, v.y as f32, v.z as f32]);
+            }
+        }
+    }
 
     #[test]
     fn catmull_rom_interpolates_its_control_points() {
