@@ -256,7 +256,24 @@ impl ShadowMaps {
         // Pieces up to two texels long: the bilinear splat spreads each over a 2×2 footprint,
         // so the deposit stays continuous at half the cost of one piece per texel.
         let pieces = super::raster::ceil_pos(0.5 * len).max(1);
-        let step = 1.0 / pieces as f32;
+        // 1 / pieces, from a table for the usual few (the same correctly rounded quotients,
+        // without a division's latency at every segment).
+        const INV: [f32; 9] = [
+            1.0,
+            1.0,
+            1.0 / 2.0,
+            1.0 / 3.0,
+            1.0 / 4.0,
+            1.0 / 5.0,
+            1.0 / 6.0,
+            1.0 / 7.0,
+            1.0 / 8.0,
+        ];
+        let step = if pieces < INV.len() {
+            INV[pieces]
+        } else {
+            1.0 / pieces as f32
+        };
         let w = len * step;
         let inv_dz = self.inv_dz;
         let s = self.size;
