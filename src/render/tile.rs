@@ -239,6 +239,11 @@ impl TileBuf {
     #[inline(always)]
     pub fn segment(&mut self, s: &SegRec, half: f32, alpha: f32) {
         let (a, b) = (&s.a, &s.b);
+        // The culling test first: most segments end here.
+        match cull_box(self.ox, self.oy, a, b, half) {
+            Some([lo0, hi0, lo1, hi1, zmin]) if !self.hidden(lo0, hi0, lo1, hi1, zmin) => {}
+            _ => return,
+        }
         let (ox, oy) = (self.ox as f32, self.oy as f32);
         let (ax, ay, bx, by) = (a.x - ox, a.y - oy, b.x - ox, b.y - oy);
         let n = self.n;
@@ -250,10 +255,6 @@ impl TileBuf {
             (ay, ax, by, bx)
         };
         let d = (maj_b - maj_a).abs();
-        match cull_box(self.ox, self.oy, a, b, half) {
-            Some([lo0, hi0, lo1, hi1, zmin]) if !self.hidden(lo0, hi0, lo1, hi1, zmin) => {}
-            _ => return,
-        }
         let (ca, cb) = (unpack(s.ca), unpack(s.cb));
         // Walk the major axis upwards.
         let (maj0, min0, z0, c0, maj1, min1, z1, c1) = if maj_b < maj_a {
