@@ -510,11 +510,9 @@ impl TileBuf {
         }
     }
 
-    /// [`TileBuf::blend_window`] written lane by lane, for processors without SSE.
-    /// [`TileBuf::blend`] into the WINDOW samples `at + k·stride` (`k` = 0..WINDOW), which are
-    /// samples `js + k` of column `col`, of a line covering `y_lo..y_hi` across the column:
-    /// the same arithmetic, lane by lane without branches (the rare sample that turns opaque
-    /// is counted afterwards).
+    /// [`TileBuf::blend_window`] on processors other than x86-64: the same arithmetic written
+    /// lane by lane, without branches (the rare sample that turns opaque is counted
+    /// afterwards).
     #[allow(clippy::too_many_arguments)]
     #[cfg_attr(target_arch = "x86_64", allow(dead_code))]
     #[inline(always)]
