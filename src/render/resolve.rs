@@ -30,6 +30,8 @@ pub(crate) struct Resolve<'a> {
 
 impl Resolve<'_> {
     /// The lit colour of the body at sample (x, y) (global), hit at view depth `t` on prim `k`.
+    /// Not inlined: it runs once per body pixel, and [`Resolve::tile`] has a copy of its loop
+    /// per supersampling factor.
     #[inline(never)]
     fn body_at(&self, x: f32, y: f32, t: f32, k: usize) -> [f32; 3] {
         let d = self.view.ray(x, y);
