@@ -127,8 +127,10 @@ const CHUNKS: usize = 16;
 struct Worker {
     buf: TileBuf,
     sorted: Vec<raster::SegRec>,
-    tmp: Vec<raster::SegRec>,
+    lows: Vec<u8>,
     keys: Vec<u16>,
+    buckets: [u32; 257],
+    order: Vec<u64>,
     raster_ns: u64,
     resolve_ns: u64,
 }
@@ -148,6 +150,8 @@ pub struct Renderer {
     needed: Vec<u8>,
     /// Per tile, its body as cast before binning.
     layers: Vec<tile::BodyLayer>,
+    /// Each tile's farthest body depth (from `layers`), for binning.
+    far: Vec<f32>,
     bins: Bins,
     prims: Vec<body::Prim>,
     workers: Vec<Mutex<Worker>>,
@@ -196,8 +200,10 @@ impl Renderer {
                 Mutex::new(Worker {
                     buf: TileBuf::default(),
                     sorted: Vec::new(),
-                    tmp: Vec::new(),
+                    lows: Vec::new(),
                     keys: Vec::new(),
+                    buckets: [0; 257],
+                    order: Vec::new(),
                     raster_ns: 0,
                     resolve_ns: 0,
                 })
@@ -217,6 +223,7 @@ impl Renderer {
             colors: Vec::new(),
             needed: Vec::new(),
             layers: Vec::new(),
+            far: Vec::new(),
             bins: Bins::default(),
             prims: Vec::new(),
             workers,
@@ -276,7 +283,7 @@ impl Renderer {
         self.cast_body(&view);
         let half = 0.5 * strand_width * ss as f32;
         let reach = half * 1.5 + 1.0;
-        self.count(&strands.offsets, reach, half);
+        self.count(&strands.offsets, reach);
         let t2a = Instant::now();
         self.shade(strands, &view, light);
         let t2b = Instant::now();
@@ -388,17 +395,16 @@ impl Renderer {
     /// Bins the segments into tiles, leaving out of each tile those the body hides there, and
     /// marks the points of the binned segments as `needed`: the two halves of the strands
     /// counted, by the pool's threads.
-    fn count(&mut self, offsets: &[u32], reach: f32, half: f32) {
+    fn count(&mut self, offsets: &[u32], reach: f32) {
         let ns = offsets.len().saturating_sub(1);
         let n = offsets.last().map_or(0, |&e| e as usize);
         self.needed.clear();
         self.needed.resize(n, 0);
         let parts = split_by_strands::<_, 2>(&mut self.needed, offsets);
         let (verts, grid, halves) = (&self.verts, &self.grid, &self.bins.halves);
-        let cull = tile::BodyCull {
-            layers: &self.layers,
-            half,
-        };
+        self.far.clear();
+        self.far.extend(self.layers.iter().map(|l| l.far));
+        let cull = tile::BodyCull { far: &self.far };
         let count = |h: usize| {
             let mut b = halves[h].lock().unwrap_or_else(|e| e.into_inner());
             let mut g = parts[h].lock().unwrap_or_else(|e| e.into_inner());
@@ -538,15 +544,24 @@ pool::multiversion! {
     fn render_tile(w: &mut Worker, t: usize, f: &TileSetup, out: &mut [f32]) -> (u64, u64) {
         let r0 = Instant::now();
         w.buf.reset_with(f.grid.tile_samples(), &f.layers[t]);
-        let n_segs = raster::sort_tile(
+        let n_segs = raster::bucket_tile(
             f.halves[0].tile(t),
             f.halves[1].tile(t),
             f.key,
             &mut w.sorted,
-            &mut w.tmp,
+            &mut w.lows,
             &mut w.keys,
+            &mut w.buckets,
         );
-        tile::draw_segments(&mut w.buf, &w.sorted[..n_segs], f.half, f.alpha);
+        tile::draw_buckets(
+            &mut w.buf,
+            &w.sorted[..n_segs],
+            &w.lows[..n_segs],
+            &w.buckets,
+            &mut w.order,
+            f.half,
+            f.alpha,
+        );
         let r1 = Instant::now();
         f.resolve.tile(&w.buf, f.grid.ss, out);
         ((r1 - r0).as_nanos() as u64, r1.elapsed().as_nanos() as u64)

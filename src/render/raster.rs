@@ -35,7 +35,7 @@ pub(crate) struct SegRec {
 }
 
 /// The frame's visible segments binned into tiles; each tile sorts its own segments by a 16-bit
-/// depth key ([`sort_tile`]) so that no pass walks the whole frame in depth
+/// depth key ([`bucket_tile`], [`super::tile::draw_buckets`]) so that no pass walks the whole frame in depth
 /// order (which would miss the cache at every segment). The strands are binned in two halves
 /// (one per thread at most), each into its own lists: a tile's segments are half 0's list then
 /// half 1's, in strand order whatever the number of threads.
@@ -191,22 +191,43 @@ impl HalfBins {
                 let z = 0.5 * (p.z + q.z);
                 zlo = mn(zlo, z);
                 zhi = mx(zhi, z);
+                // The body's test in every tile ([`BodyCull::hides`]).
+                let zmin = BodyCull::depth(p, q);
                 let mut kept = false;
-                for ty in y0..y1 + 1 {
-                    for tx in x0..x1 + 1 {
-                        let t = ty * grid.tiles_x + tx;
-                        if cull.hides(t, p, q) {
-                            continue;
+                if x1 - x0 < 2 && y1 - y0 < 2 {
+                    // Up to 2 × 2 tiles (nearly always): all four corners tried, each kept
+                    // if it is a distinct tile the body does not hide, written whether kept
+                    // or not, so that no branch depends on how many there are.
+                    self.pairs.reserve(4);
+                    let w = grid.tiles_x;
+                    let tiles = [y0 * w + x0, y0 * w + x1, y1 * w + x0, y1 * w + x1];
+                    let distinct = [true, x1 != x0, y1 != y0, x1 != x0 && y1 != y0];
+                    for (&t, &new) in tiles.iter().zip(&distinct) {
+                        let keep = new & (zmin < cull.far[t]);
+                        let len = self.pairs.len();
+                        // SAFETY: 4 entries were reserved above, and at most 4 are added.
+                        unsafe {
+                            self.pairs.as_mut_ptr().add(len).write((i as u32, t as u32));
+                            self.pairs.set_len(len + keep as usize);
                         }
-                        self.start[t + 1] += 1;
-                        self.pairs.push((i as u32, t as u32));
-                        kept = true;
+                        self.start[t + 1] += keep as u32;
+                        kept |= keep;
+                    }
+                } else {
+                    for ty in y0..y1 + 1 {
+                        for tx in x0..x1 + 1 {
+                            let t = ty * grid.tiles_x + tx;
+                            if cull.hides(t, p, q) {
+                                continue;
+                            }
+                            self.start[t + 1] += 1;
+                            self.pairs.push((i as u32, t as u32));
+                            kept = true;
+                        }
                     }
                 }
-                if kept {
-                    needed[i - base] = 1;
-                    needed[i + 1 - base] = 1;
-                }
+                needed[i - base] |= kept as u8;
+                needed[i + 1 - base] |= kept as u8;
             }
         }
         for t in 1..=nt {
@@ -269,58 +290,48 @@ impl DepthKey {
     }
 }
 
-/// Sorts a tile's segments front to back into `out[..n]`, `n` their number (by increasing
-/// key, equal keys in strand order: two stable 8-bit counting passes, so the order is the
-/// same on every run). The records themselves move, so that the rasteriser then reads them in
-/// order from memory; `keys` holds the keys between the passes.
+/// Puts a tile's segments (`first` then `second`, in strand order) into 256 depth buckets by
+/// the high byte of their keys, front to back, into `out[..n]` (`n` their number): bucket k is
+/// `buckets[k]..buckets[k + 1]`, in strand order (one stable counting pass), and `lows[i]` is
+/// the low byte of `out[i]`'s key. The tile pass finishes the sort bucket by bucket, after
+/// culling ([`super::tile::draw_buckets`]). The records themselves move, so that the
+/// rasteriser then reads them from memory in nearly the order it draws them.
 #[inline(always)]
-pub(crate) fn sort_tile(
+pub(crate) fn bucket_tile(
     first: &[SegRec],
     second: &[SegRec],
     key: DepthKey,
     out: &mut Vec<SegRec>,
-    tmp: &mut Vec<SegRec>,
+    lows: &mut Vec<u8>,
     keys: &mut Vec<u16>,
+    buckets: &mut [u32; 257],
 ) -> usize {
     let n = first.len() + second.len();
     // Grown, never shrunk: every record up to `n` is written below, so the buffers are only
     // filled with defaults when a tile needs more room than any before it.
-    for v in [&mut *out, &mut *tmp] {
-        if v.len() < n {
-            v.resize(n, SegRec::default());
-        }
+    if out.len() < n {
+        out.resize(n, SegRec::default());
     }
     if keys.len() < n {
         keys.resize(n, 0);
+        lows.resize(n, 0);
     }
-    let (out, tmp, keys) = (&mut out[..n], &mut tmp[..n], &mut keys[..n]);
-    // Low byte: from the records, each key computed once and kept for the second pass.
-    let mut counts = [0u32; 257];
-    for r in first.iter().chain(second) {
-        counts[(key.of(r) & 0xff) as usize + 1] += 1;
-    }
-    for d in 1..257 {
-        counts[d] += counts[d - 1];
-    }
-    for r in first.iter().chain(second) {
-        let k = key.of(r);
-        let at = &mut counts[(k & 0xff) as usize];
-        tmp[*at as usize] = *r;
-        keys[*at as usize] = k as u16;
-        *at += 1;
-    }
-    // High byte.
-    let mut counts = [0u32; 257];
-    for &k in keys.iter() {
-        counts[(k >> 8) as usize + 1] += 1;
+    let (out, keys, lows) = (&mut out[..n], &mut keys[..n], &mut lows[..n]);
+    *buckets = [0; 257];
+    for (r, k) in first.iter().chain(second).zip(keys.iter_mut()) {
+        *k = key.of(r) as u16;
+        buckets[(*k >> 8) as usize + 1] += 1;
     }
     for d in 1..257 {
-        counts[d] += counts[d - 1];
+        buckets[d] += buckets[d - 1];
     }
-    for (r, &k) in tmp.iter().zip(keys.iter()) {
-        let at = &mut counts[(k >> 8) as usize];
-        out[*at as usize] = *r;
-        *at += 1;
+    let mut at = [0u32; 256];
+    at.copy_from_slice(&buckets[..256]);
+    for (r, &k) in first.iter().chain(second).zip(keys.iter()) {
+        let a = &mut at[(k >> 8) as usize];
+        out[*a as usize] = *r;
+        lows[*a as usize] = k as u8;
+        *a += 1;
     }
     n
 }

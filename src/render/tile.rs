@@ -242,17 +242,27 @@ impl TileBuf {
         }
     }
 
+    /// Whether the tile pass can skip segment `s` (a line of half-width `half` samples) as
+    /// things stand: it draws nothing here whatever the tile holds, or every block it touches
+    /// is opaque or hidden by the body at its nearest depth. Blocks only ever close, so a
+    /// segment culled now would be refused by every sample later too.
+    #[inline(always)]
+    fn culls(&self, s: &SegRec, half: f32) -> bool {
+        match cull_box(self.ox, self.oy, &s.a, &s.b, half) {
+            Some([lo0, hi0, lo1, hi1, zmin]) => self.hidden(lo0, hi0, lo1, hi1, zmin),
+            None => true,
+        }
+    }
+
     /// Blends segment `s` (global sample coordinates) behind what the tile holds: a line of
     /// half-width `half` samples and opacity `alpha` where it covers a whole sample, its
     /// colour interpolated between its two points' colours.
+    /// No segment-level culling test here: the caller has made [`TileBuf::culls`] (culling
+    /// is exact, so drawing a hidden segment changes no sample; the group tests below still
+    /// skip most of its work).
     #[inline(always)]
-    pub fn segment(&mut self, s: &SegRec, half: f32, alpha: f32) {
+    fn segment(&mut self, s: &SegRec, half: f32, alpha: f32) {
         let (a, b) = (&s.a, &s.b);
-        // The culling test first: most segments end here.
-        match cull_box(self.ox, self.oy, a, b, half) {
-            Some([lo0, hi0, lo1, hi1, zmin]) if !self.hidden(lo0, hi0, lo1, hi1, zmin) => {}
-            _ => return,
-        }
         let (ox, oy) = (self.ox as f32, self.oy as f32);
         let (ax, ay, bx, by) = (a.x - ox, a.y - oy, b.x - ox, b.y - oy);
         let n = self.n;
@@ -587,12 +597,45 @@ impl TileBuf {
 }
 
 multiversion! {
-    /// Blends `segs` (sorted front to back) into `buf`, stopping once every sample is opaque.
-    pub(crate) fn draw_segments(buf: &mut TileBuf, segs: &[SegRec], half: f32, alpha: f32) {
-        for s in segs {
-            buf.segment(s, half, alpha);
-            if buf.alive == 0 {
-                break;
+    /// Blends a tile's segments into `buf` front to back, stopping once every sample is
+    /// opaque. `segs` is in depth buckets (bucket k is `buckets[k]..buckets[k + 1]`, by the
+    /// high byte of the 16-bit depth key, each in strand order; `lows` holds the low bytes).
+    /// Bucket by bucket, the culling test is made first, against the tile as every nearer
+    /// bucket left it, and only the segments it keeps are sorted by their low byte and drawn:
+    /// the order is that of a stable sort of the whole key (equal keys in strand order), and
+    /// the culled majority is never sorted.
+    pub(crate) fn draw_buckets(
+        buf: &mut TileBuf,
+        segs: &[SegRec],
+        lows: &[u8],
+        buckets: &[u32; 257],
+        order: &mut Vec<u64>,
+        half: f32,
+        alpha: f32,
+    ) {
+        for k in 0..256 {
+            let (s, e) = (buckets[k] as usize, buckets[k + 1] as usize);
+            if s == e {
+                continue;
+            }
+            // Low byte, then position in the bucket: unique, so the unstable sort gives the
+            // stable order. Written at every segment and kept where not culled: no branch on
+            // the test's outcome, which the processor could not guess.
+            if order.len() < e - s {
+                order.resize(e - s, 0);
+            }
+            let mut kept = 0;
+            for (i, (seg, &low)) in segs[s..e].iter().zip(&lows[s..e]).enumerate() {
+                order[kept] = (low as u64) << 32 | i as u64;
+                kept += !buf.culls(seg, half) as usize;
+            }
+            let order = &mut order[..kept];
+            order.sort_unstable();
+            for &o in order.iter() {
+                buf.segment(&segs[s + (o as u32) as usize], half, alpha);
+                if buf.alive == 0 {
+                    return;
+                }
             }
         }
     }
@@ -668,7 +711,7 @@ fn chunk_hidden(chunk: &[f32; LANES], z: f32) -> u32 {
 #[derive(Debug, Default)]
 pub(crate) struct BodyLayer {
     /// The farthest body depth over the tile (`INFINITY` where a sample has no body).
-    far: f32,
+    pub far: f32,
     ox: i32,
     oy: i32,
     body_seen: bool,
@@ -677,31 +720,31 @@ pub(crate) struct BodyLayer {
     block_close: Vec<f32>,
 }
 
-/// Every tile's [`BodyLayer`], for binning.
+/// Every tile's farthest body depth ([`BodyLayer`]), for binning.
 pub(crate) struct BodyCull<'a> {
-    pub layers: &'a [BodyLayer],
-    /// Half the strand width, samples.
-    pub half: f32,
+    pub far: &'a [f32],
 }
 
 impl BodyCull<'_> {
-    /// Whether the body alone hides segment a–b in tile `t`.
+    /// The depth that [`BodyCull::hides`] compares: the segment's nearest, or infinity for
+    /// a segment with no length, which draws nothing anywhere.
+    #[inline(always)]
+    pub fn depth(a: &ScreenVertex, b: &ScreenVertex) -> f32 {
+        if a.x != b.x || a.y != b.y {
+            mn(a.z, b.z)
+        } else {
+            f32::INFINITY
+        }
+    }
+
+    /// Whether the body alone hides segment a–b in tile `t`, a tile its box reaches: it has
+    /// no length, or lies at or behind the body's farthest depth over the tile. Only the
+    /// whole tile's test: the finer ones cost more here than binning the segment (the tile
+    /// pass makes them anyway), and whatever this keeps, the tile pass's own first test
+    /// still culls.
     #[inline(always)]
     pub fn hides(&self, t: usize, a: &ScreenVertex, b: &ScreenVertex) -> bool {
-        self.layers[t].hides(a, b, self.half)
-    }
-}
-
-impl BodyLayer {
-    /// Whether the tile pass would skip segment a–b here before drawing anything.
-    #[inline(always)]
-    pub fn hides(&self, a: &ScreenVertex, b: &ScreenVertex, half: f32) -> bool {
-        // Only the whole tile's test: the finer ones cost more here than binning the segment
-        // (the tile pass makes them anyway).
-        match cull_box(self.ox, self.oy, a, b, half) {
-            Some([.., zmin]) => zmin >= self.far,
-            None => true,
-        }
+        Self::depth(a, b) >= self.far[t]
     }
 }
 
@@ -872,11 +915,12 @@ mod tests {
             at(&view, [-0.01, 0.0, 0.097]),
             at(&view, [0.01, 0.0, 0.097]),
         );
-        assert!(layer.hides(&behind.0, &behind.1, 0.9));
-        assert!(!layer.hides(&in_front.0, &in_front.1, 0.9));
-        assert!(!layer.hides(&grazing.0, &grazing.1, 0.9));
-        // A segment with no length along its major axis draws nothing anywhere.
-        assert!(layer.hides(&in_front.0, &in_front.0, 0.9));
+        let cull = BodyCull { far: &[layer.far] };
+        assert!(cull.hides(0, &behind.0, &behind.1));
+        assert!(!cull.hides(0, &in_front.0, &in_front.1));
+        assert!(!cull.hides(0, &grazing.0, &grazing.1));
+        // A segment with no length draws nothing anywhere.
+        assert!(cull.hides(0, &in_front.0, &in_front.0));
     }
 
     /// A small deterministic generator for the tests below: uniform in [0, 1).
