@@ -410,7 +410,16 @@ impl Renderer {
             let mut g = parts[h].lock().unwrap_or_else(|e| e.into_inner());
             let (base, ref mut needed) = *g;
             let strands = h * ns / 2..(h + 1) * ns / 2;
-            b.count(verts, offsets, strands, grid, reach, &cull, (base, needed));
+            count_half(
+                &mut b,
+                verts,
+                offsets,
+                strands,
+                grid,
+                reach,
+                &cull,
+                (base, needed),
+            );
         };
         self.pool.for_each(2, &count);
     }
@@ -421,7 +430,7 @@ impl Renderer {
             (&self.verts, &self.colors, &self.grid, &self.bins.halves);
         let fill = |h: usize| {
             let mut b = halves[h].lock().unwrap_or_else(|e| e.into_inner());
-            b.fill(verts, colors, grid);
+            fill_half(&mut b, verts, colors, grid);
         };
         self.pool.for_each(2, &fill);
     }
@@ -565,6 +574,30 @@ pool::multiversion! {
         let r1 = Instant::now();
         f.resolve.tile(&w.buf, f.grid.ss, out);
         ((r1 - r0).as_nanos() as u64, r1.elapsed().as_nanos() as u64)
+    }
+}
+
+pool::multiversion! {
+    /// [`raster::HalfBins::count`].
+    #[allow(clippy::too_many_arguments)]
+    fn count_half(
+        b: &mut raster::HalfBins,
+        verts: &[ScreenVertex],
+        offsets: &[u32],
+        strands: std::ops::Range<usize>,
+        grid: &Grid,
+        reach: f32,
+        cull: &tile::BodyCull,
+        needed: (usize, &mut [u8]),
+    ) {
+        b.count(verts, offsets, strands, grid, reach, cull, needed);
+    }
+}
+
+pool::multiversion! {
+    /// [`raster::HalfBins::fill`].
+    fn fill_half(b: &mut raster::HalfBins, verts: &[ScreenVertex], colors: &[u32], grid: &Grid) {
+        b.fill(verts, colors, grid);
     }
 }
 

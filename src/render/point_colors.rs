@@ -142,19 +142,17 @@ impl PointShader<'_> {
             {
                 continue;
             }
-            let mut pt = [[0.0f32; LANES]; 3];
-            let mut d = [[0.0f32; LANES]; 3];
-            let mut lq = [[0.0f32; LANES]; 3];
-            for l in 0..LANES {
-                let k = (k0 + l).min(last);
-                let (prev, next) = (pts[k.saturating_sub(1)], pts[(k + 1).min(last)]);
-                let q = self.maps.point(first + k);
-                for a in 0..3 {
-                    pt[a][l] = pts[k][a];
-                    d[a][l] = next[a] - prev[a];
-                    lq[a][l] = q[a];
-                }
-            }
+            // Each lane's values loaded straight into its vector lane (built lane by lane in
+            // a stack array, the vectors were then loaded across eight separate stores, a
+            // store-forwarding stall at every group).
+            let k: [usize; LANES] = std::array::from_fn(|l| (k0 + l).min(last));
+            let prev: [[f32; 3]; LANES] = std::array::from_fn(|l| pts[k[l].saturating_sub(1)]);
+            let next: [[f32; 3]; LANES] = std::array::from_fn(|l| pts[(k[l] + 1).min(last)]);
+            let here: [[f32; 3]; LANES] = std::array::from_fn(|l| pts[k[l]]);
+            let light: [[f32; 3]; LANES] = std::array::from_fn(|l| self.maps.point(first + k[l]));
+            let pt: [V; 3] = std::array::from_fn(|a| lanes(|l| here[l][a]));
+            let d: [V; 3] = std::array::from_fn(|a| lanes(|l| next[l][a] - prev[l][a]));
+            let lq: [V; 3] = std::array::from_fn(|a| lanes(|l| light[l][a]));
             let omega = self.maps.opacity_lanes(lq, 1.0);
             let words = self.shade_lanes(&shader, pt, d, omega);
             for (o, &w) in out[k0..].iter_mut().zip(&words) {

@@ -150,6 +150,7 @@ impl HalfBins {
     /// each segment kept in `needed` (`needed.1[k]` is point `needed.0 + k`). `reach` is how
     /// far (samples) a line reaches beyond its centre line.
     #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
     pub fn count(
         &mut self,
         verts: &[ScreenVertex],
@@ -237,6 +238,7 @@ impl HalfBins {
     }
 
     /// Fills the tile lists, each segment with the packed colours `colors` of its points.
+    #[inline(always)]
     pub fn fill(&mut self, verts: &[ScreenVertex], colors: &[u32], grid: &Grid) {
         let nt = grid.tiles();
         let total = self.start[nt] as usize;
