@@ -149,7 +149,7 @@ pub struct Renderer {
     /// Per strand point, whether a binned segment uses it (1) or not (0).
     needed: Vec<u8>,
     /// Per tile, its body as cast before binning.
-    layers: Vec<tile::BodyLayer>,
+    layers: Vec<Mutex<tile::BodyLayer>>,
     /// Each tile's farthest body depth (from `layers`), for binning.
     far: Vec<f32>,
     bins: Bins,
@@ -384,6 +384,7 @@ impl Renderer {
                 let (t0, ref mut run) = *g;
                 for (k, layer) in run.iter_mut().enumerate() {
                     let origin = grid.origin(t0 + k);
+                    let layer = layer.get_mut().unwrap_or_else(|e| e.into_inner());
                     w.buf
                         .cast_layer(grid.tile_samples(), origin, view, prims, layer);
                 }
@@ -403,7 +404,11 @@ impl Renderer {
         let parts = split_by_strands::<_, 2>(&mut self.needed, offsets);
         let (verts, grid, halves) = (&self.verts, &self.grid, &self.bins.halves);
         self.far.clear();
-        self.far.extend(self.layers.iter().map(|l| l.far));
+        self.far.extend(
+            self.layers
+                .iter_mut()
+                .map(|l| l.get_mut().unwrap_or_else(|e| e.into_inner()).far),
+        );
         let cull = tile::BodyCull { far: &self.far };
         let count = |h: usize| {
             let mut b = halves[h].lock().unwrap_or_else(|e| e.into_inner());
@@ -539,7 +544,7 @@ impl Renderer {
 /// What every tile of a frame shares.
 struct TileSetup<'a> {
     grid: Grid,
-    layers: &'a [tile::BodyLayer],
+    layers: &'a [Mutex<tile::BodyLayer>],
     halves: [&'a raster::HalfBins; 2],
     key: raster::DepthKey,
     half: f32,
@@ -552,7 +557,8 @@ pool::multiversion! {
     /// returns the nanoseconds spent rasterising and resolving.
     fn render_tile(w: &mut Worker, t: usize, f: &TileSetup, out: &mut [f32]) -> (u64, u64) {
         let r0 = Instant::now();
-        w.buf.reset_with(f.grid.tile_samples(), &f.layers[t]);
+        let mut layer = f.layers[t].lock().unwrap_or_else(|e| e.into_inner());
+        w.buf.reset_with(f.grid.tile_samples(), &mut layer);
         let n_segs = raster::bucket_tile(
             f.halves[0].tile(t),
             f.halves[1].tile(t),

@@ -766,28 +766,30 @@ impl TileBuf {
         self.close_blocks();
         (layer.ox, layer.oy) = (ox, oy);
         layer.body_seen = self.body_seen;
-        layer.zb.clone_from(&self.zb);
-        layer.prim.clone_from(&self.prim);
-        layer.block_close.clone_from(&self.block_close);
         // The padding is NEG_INFINITY: it never raises the maximum.
         layer.far = self
             .block_close
             .iter()
             .fold(f32::NEG_INFINITY, |m, &c| mx(m, c));
+        // Handed over, not copied: this buffer gets the layer's old arrays, which the next
+        // cast clears.
+        self.swap_body(layer);
     }
 
-    /// Clears the buffer for the tile of `layer` (`n`² samples) and takes its body.
-    pub fn reset_with(&mut self, n: usize, layer: &BodyLayer) {
+    /// Exchanges the body arrays of this buffer and `layer`.
+    fn swap_body(&mut self, layer: &mut BodyLayer) {
+        std::mem::swap(&mut self.zb, &mut layer.zb);
+        std::mem::swap(&mut self.prim, &mut layer.prim);
+        std::mem::swap(&mut self.block_close, &mut layer.block_close);
+    }
+
+    /// Clears the buffer for the tile of `layer` (`n`² samples, cast this frame) and takes
+    /// its body: the arrays are handed over, not copied, and the layer is left with this
+    /// buffer's old ones (a layer is used once a frame, and cast again before the next).
+    pub fn reset_with(&mut self, n: usize, layer: &mut BodyLayer) {
         self.reset_samples(n, layer.ox, layer.oy);
-        // Every body value is copied: the buffers only need the right length.
-        let m = n * n;
-        self.zb.resize(m, 0.0);
-        self.prim.resize(m, 0);
-        self.block_close.resize(self.nb * self.stride, 0.0);
         self.body_seen = layer.body_seen;
-        self.zb.copy_from_slice(&layer.zb);
-        self.prim.copy_from_slice(&layer.prim);
-        self.block_close.copy_from_slice(&layer.block_close);
+        self.swap_body(layer);
     }
 }
 
@@ -1043,7 +1045,7 @@ mod tests {
 
     #[test]
     fn a_tile_started_from_its_body_layer_has_the_body_cast_in_it() {
-        let (view, layer) = sphere_tile();
+        let (view, mut layer) = sphere_tile();
         let mut direct = TileBuf::default();
         direct.reset_samples(64, 0, 0);
         direct.reset_body();
@@ -1054,7 +1056,7 @@ mod tests {
         from_layer.reset_samples(64, 64, 64);
         from_layer.reset_body();
         from_layer.zb.fill(-1.0);
-        from_layer.reset_with(64, &layer);
+        from_layer.reset_with(64, &mut layer);
         assert_eq!(from_layer.zb, direct.zb);
         assert_eq!(from_layer.block_close, direct.block_close);
         assert_eq!((from_layer.ox, from_layer.oy), (0, 0));
