@@ -558,10 +558,18 @@ pool::multiversion! {
     fn render_tile(w: &mut Worker, t: usize, f: &TileSetup, out: &mut [f32]) -> (u64, u64) {
         let r0 = Instant::now();
         let mut layer = f.layers[t].lock().unwrap_or_else(|e| e.into_inner());
+        let (first, second) = (f.halves[0].tile(t), f.halves[1].tile(t));
+        if first.is_empty() && second.is_empty() {
+            // No hair here (most of the frame, around the figure): nothing to clear or draw.
+            w.buf.take_body(f.grid.tile_samples(), &mut layer);
+            let r1 = Instant::now();
+            f.resolve.tile(&w.buf, f.grid.ss, out);
+            return ((r1 - r0).as_nanos() as u64, r1.elapsed().as_nanos() as u64);
+        }
         w.buf.reset_with(f.grid.tile_samples(), &mut layer);
         let n_segs = raster::bucket_tile(
-            f.halves[0].tile(t),
-            f.halves[1].tile(t),
+            first,
+            second,
             f.key,
             &mut w.sorted,
             &mut w.lows,

@@ -58,20 +58,39 @@ impl Resolve<'_> {
     pub fn tile(&self, buf: &TileBuf, ss: usize, out: &mut [f32]) {
         // The supersampling factor as a constant where it can be, so that each pixel's
         // samples are visited by unrolled code, without loop counters.
-        match ss {
-            2 => self.tile_ss(buf, out, || 2),
-            3 => self.tile_ss(buf, out, || 3),
-            4 => self.tile_ss(buf, out, || 4),
-            _ => self.tile_ss(buf, out, || ss),
+        // Likewise whether there is hair: a tile without reads no sample.
+        match (ss, buf.hairless) {
+            (2, false) => self.tile_ss::<true>(buf, out, || 2),
+            (3, false) => self.tile_ss::<true>(buf, out, || 3),
+            (4, false) => self.tile_ss::<true>(buf, out, || 4),
+            (_, false) => self.tile_ss::<true>(buf, out, || ss),
+            (2, true) => self.tile_ss::<false>(buf, out, || 2),
+            (_, true) => self.tile_ss::<false>(buf, out, || ss),
         }
     }
 
-    /// [`Resolve::tile`] at supersampling factor `ss()`.
+    /// [`Resolve::tile`] at supersampling factor `ss()`, of a tile with hair drawn or not
+    /// (`HAIR`; without, every sample is clear, which gives the same arithmetic the same
+    /// values).
     #[inline(always)]
-    fn tile_ss(&self, buf: &TileBuf, out: &mut [f32], ss: impl Fn() -> usize) {
+    fn tile_ss<const HAIR: bool>(&self, buf: &TileBuf, out: &mut [f32], ss: impl Fn() -> usize) {
         let ss = ss();
         let n = buf.n;
         let norm = 1.0 / (ss * ss) as f32;
+        if !HAIR && !buf.body_seen() {
+            // Background alone: every pixel is the sum below of the same samples.
+            let mut acc = [0.0f32; 3];
+            let (tr, bg) = (1.0f32, self.background);
+            for _ in 0..ss * ss {
+                let c = [0.0 + tr * bg[0], 0.0 + tr * bg[1], 0.0 + tr * bg[2]];
+                acc = [acc[0] + c[0], acc[1] + c[1], acc[2] + c[2]];
+            }
+            let pixel = [acc[0] * norm, acc[1] * norm, acc[2] * norm];
+            for o in out[..TILE * TILE * 3].chunks_exact_mut(3) {
+                o.copy_from_slice(&pixel);
+            }
+            return;
+        }
         for py in 0..TILE {
             for px in 0..TILE {
                 let mut acc = [0.0f32; 3];
@@ -85,7 +104,11 @@ impl Resolve<'_> {
                     for sx in 0..ss {
                         let i = px * ss + sx;
                         let at = j * n + i;
-                        let [r, g, b, tr] = buf.px[at].0;
+                        let [r, g, b, tr] = if HAIR {
+                            buf.px[at].0
+                        } else {
+                            [0.0, 0.0, 0.0, 1.0]
+                        };
                         let mut c = [r, g, b];
                         if tr >= OPAQUE {
                             let base = if buf.zb[at].is_finite() {

@@ -51,6 +51,9 @@ pub(crate) struct TileBuf {
     pub prim: Vec<u16>,
     /// Samples not yet opaque.
     pub alive: usize,
+    /// No hair in the tile this frame ([`TileBuf::take_body`]): `px` is stale and every
+    /// sample is clear (no colour, transmittance 1).
+    pub hairless: bool,
     /// Blocks of BLOCK² samples per side.
     nb: usize,
     /// Blocks per row in `block_alive` and `block_close`: `nb` padded to whole LANES (block
@@ -776,6 +779,11 @@ impl TileBuf {
         self.swap_body(layer);
     }
 
+    /// Whether the body covers any sample of the tile.
+    pub fn body_seen(&self) -> bool {
+        self.body_seen
+    }
+
     /// Exchanges the body arrays of this buffer and `layer`.
     fn swap_body(&mut self, layer: &mut BodyLayer) {
         std::mem::swap(&mut self.zb, &mut layer.zb);
@@ -788,6 +796,17 @@ impl TileBuf {
     /// buffer's old ones (a layer is used once a frame, and cast again before the next).
     pub fn reset_with(&mut self, n: usize, layer: &mut BodyLayer) {
         self.reset_samples(n, layer.ox, layer.oy);
+        self.hairless = false;
+        self.body_seen = layer.body_seen;
+        self.swap_body(layer);
+    }
+
+    /// [`TileBuf::reset_with`] for a tile no hair reaches this frame: the body is taken, but
+    /// the samples are not cleared (nothing is drawn, and the resolve reads none of them).
+    pub fn take_body(&mut self, n: usize, layer: &mut BodyLayer) {
+        (self.n, self.ox, self.oy) = (n, layer.ox, layer.oy);
+        self.set_blocks(n);
+        self.hairless = true;
         self.body_seen = layer.body_seen;
         self.swap_body(layer);
     }
@@ -923,6 +942,53 @@ mod tests {
         assert!(!cull.hides(0, &grazing.0, &grazing.1));
         // A segment with no length draws nothing anywhere.
         assert!(cull.hides(0, &in_front.0, &in_front.0));
+    }
+
+    #[test]
+    fn a_tile_without_hair_resolves_as_if_cleared_without_reading_its_samples() {
+        let (view, _) = sphere_tile();
+        let prims = sphere_prims(&view);
+        let maps = super::super::shadow::ShadowMaps::new(16);
+        let resolve = super::super::resolve::Resolve {
+            view: &view,
+            prims: &prims,
+            maps: &maps,
+            map_size: 16.0,
+            background: [0.3, 0.5, 0.7],
+            body: [0.8, 0.6, 0.5],
+            ambient: 0.2,
+            kappa: 0.5,
+            light: [0.0, 0.6, 0.8],
+        };
+        // The sphere's tile, and one with no body (cast without primitives).
+        for with_body in [true, false] {
+            let cast = || {
+                let (mut scratch, mut layer) = (TileBuf::default(), BodyLayer::default());
+                let p: &[super::super::body::Prim] = if with_body { &prims } else { &[] };
+                scratch.cast_layer(64, (0, 0), &view, p, &mut layer);
+                layer
+            };
+            let mut cleared = TileBuf::default();
+            cleared.reset_with(64, &mut cast());
+            let mut taken = TileBuf::default();
+            // Samples left from another tile, which the resolve must not read.
+            taken.reset_samples(64, 64, 64);
+            taken.px.fill(Px([9.0, 9.0, 9.0, 0.0]));
+            taken.take_body(64, &mut cast());
+            assert_eq!(taken.body_seen(), with_body);
+            let (mut a, mut b) = (vec![0.0f32; 32 * 32 * 3], vec![1.0f32; 32 * 32 * 3]);
+            resolve.tile(&cleared, 2, &mut a);
+            resolve.tile(&taken, 2, &mut b);
+            let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+            assert_eq!(bits(&a), bits(&b), "with body: {with_body}");
+            if !with_body {
+                assert!(a
+                    .chunks(3)
+                    .all(|p| (p[0] - 0.3).abs() < 1e-6 && p[2] > 0.69));
+            } else {
+                assert!(a.chunks(3).any(|p| (p[0] - 0.3).abs() > 0.01));
+            }
+        }
     }
 
     /// A small deterministic generator for the tests below: uniform in [0, 1).
