@@ -31,6 +31,11 @@ const BLOCK: usize = 4;
 /// Lanes of one comparison of a row of culling depths: rows of blocks are padded to a
 /// multiple of this, so that a row is tested in whole vectors and yields a bit mask.
 const LANES: usize = 16;
+/// Block rows of a narrow box that [`TileBuf::hidden`] tests without a loop.
+const NARROW_ROWS: usize = 8;
+/// Entries past the last row of the per-block arrays, so that 4 blocks can be read from any
+/// block of a row.
+const TAIL: usize = 3;
 /// Samples of the fixed per-column window of thin lines.
 const WINDOW: usize = 4;
 
@@ -63,7 +68,7 @@ pub(crate) struct TileBuf {
     block_alive: Vec<u32>,
     /// Per block, the view depth at and beyond which nothing shows: the farthest body depth
     /// (`INFINITY` if a sample has no body), `NEG_INFINITY` once every sample is opaque (and
-    /// in the padding).
+    /// in the padding, and in the TAIL entries past the last row).
     block_close: Vec<f32>,
     /// Whether the body covers any sample of the tile.
     body_seen: bool,
@@ -113,6 +118,7 @@ impl TileBuf {
         self.block_close
             .resize(self.nb * self.stride, f32::INFINITY);
         self.close_padding();
+        self.block_close.extend([f32::NEG_INFINITY; TAIL]);
         self.body_seen = false;
     }
 
@@ -149,6 +155,23 @@ impl TileBuf {
         let bx1 = (floor_pos(x1) / BLOCK).min(last);
         let by0 = (floor_pos(y0) / BLOCK).min(last);
         let by1 = (floor_pos(y1) / BLOCK).min(last);
+        if bx1 - bx0 < 4 && by1 - by0 < NARROW_ROWS {
+            // At most 4 blocks wide and NARROW_ROWS tall (nearly all boxes: hair hangs, so
+            // most segments are steep): each row's blocks from bx0 in one unaligned 4-lane
+            // compare (the array has room past its last row), every one of the NARROW_ROWS
+            // rows tested (rows repeated where the box has fewer), and no loop or early
+            // exit whose outcome the processor would have to guess.
+            let want = (1u32 << (bx1 - bx0 + 1)) - 1;
+            let mut m = want;
+            for r in 0..NARROW_ROWS {
+                let at = (by0 + r).min(by1) * self.stride + bx0;
+                let four: &[f32; 4] = self.block_close[at..at + 4]
+                    .try_into()
+                    .expect("a slice of 4");
+                m &= four_hidden(four, z);
+            }
+            return m == want;
+        }
         // Row by row, each row's blocks compared all at once into a bit mask: no loop with a
         // data-dependent trip count per block, on a test made for every binned segment.
         let want = (u32::MAX >> (31 - bx1)) & (u32::MAX << bx0);
@@ -674,6 +697,28 @@ fn row_hidden(row: &[f32], z: f32) -> u32 {
     mask
 }
 
+/// Bit k set where depth `z` is at or behind `four[k]` (one SSE compare, part of every
+/// x86-64).
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+fn four_hidden(four: &[f32; 4], z: f32) -> u32 {
+    use std::arch::x86_64::{_mm_cmpge_ps, _mm_loadu_ps, _mm_movemask_ps, _mm_set1_ps};
+    // SAFETY: SSE is in the x86-64 baseline; the load reads the 4 floats of `four`.
+    // `cmpge` is false for NaN, as `z >= c` is.
+    unsafe { _mm_movemask_ps(_mm_cmpge_ps(_mm_set1_ps(z), _mm_loadu_ps(four.as_ptr()))) as u32 }
+}
+
+/// Bit k set where depth `z` is at or behind `four[k]`.
+#[cfg(not(target_arch = "x86_64"))]
+#[inline(always)]
+fn four_hidden(four: &[f32; 4], z: f32) -> u32 {
+    let mut bits = 0;
+    for (l, &c) in four.iter().enumerate() {
+        bits |= ((z >= c) as u32) << l;
+    }
+    bits
+}
+
 /// [`row_hidden`] of one chunk: four compares and mask moves (SSE, part of every x86-64;
 /// written lane by lane, the compiler made a long chain of scalar compares and shifts).
 #[cfg(target_arch = "x86_64")]
@@ -1096,7 +1141,8 @@ mod tests {
     #[test]
     fn a_box_is_hidden_exactly_when_every_block_it_touches_is_closed_at_its_depth() {
         // Against the plain definition, at 2×2, 3×3 and 4×4 supersampling (one and two
-        // 16-block chunks per row), for boxes of one to many block rows.
+        // 16-block chunks per row), for boxes of one to many block rows and columns (narrow
+        // and tall, wide and short, and large).
         let mut rng = 7u64;
         for n in [64usize, 96, 128] {
             let mut buf = TileBuf::default();
@@ -1120,7 +1166,7 @@ mod tests {
             for _ in 0..4000 {
                 let x0 = lcg(&mut rng) * (n as f32 + 8.0) - 4.0;
                 let y0 = lcg(&mut rng) * (n as f32 + 8.0) - 4.0;
-                let x1 = x0 + lcg(&mut rng) * 12.0;
+                let x1 = x0 + lcg(&mut rng) * if lcg(&mut rng) < 0.2 { 40.0 } else { 12.0 };
                 let y1 = y0 + lcg(&mut rng) * if lcg(&mut rng) < 0.2 { 40.0 } else { 12.0 };
                 let z = lcg(&mut rng) * 1.2 - 0.1;
                 let clamp = |v: f32| (floor_pos(v) / BLOCK).min(nb - 1);
