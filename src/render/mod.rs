@@ -11,7 +11,9 @@
 //!    the maps' transmittance ([`shading`], [`point_colors`]): Zhang and Wünsche shade per
 //!    vertex and let the rasteriser interpolate colours (§6.1), and so does this renderer.
 //!    Each tile sorts its segments by depth and blends them front to back on a supersampled
-//!    grid.
+//!    grid (a first pass puts them in 256 depth buckets; bucket by bucket, the segments that
+//!    hair already drawn or the body hides are culled, and only the rest are sorted and
+//!    drawn). A tile no segment reaches is neither cleared nor drawn.
 //! 4. **Resolve** ([`resolve`]): body or background behind the hair, box filter per pixel,
 //!    3×3 postfilter, sRGB.
 //!
