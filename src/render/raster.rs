@@ -35,8 +35,8 @@ pub(crate) struct SegRec {
 }
 
 /// The frame's visible segments binned into tiles; each tile sorts its own segments by a 16-bit
-/// depth key ([`bucket_tile`], [`super::tile::draw_buckets`]) so that no pass walks the whole frame in depth
-/// order (which would miss the cache at every segment). The strands are binned in two halves
+/// depth key ([`bucket_tile`], [`super::tile::draw_buckets`]) so that no pass walks the whole
+/// frame in depth order (which would miss the cache at every segment). The strands are binned in two halves
 /// (one per thread at most), each into its own lists: a tile's segments are half 0's list then
 /// half 1's, in strand order whatever the number of threads.
 #[derive(Debug, Default)]
@@ -192,7 +192,7 @@ impl HalfBins {
                 let z = 0.5 * (p.z + q.z);
                 zlo = mn(zlo, z);
                 zhi = mx(zhi, z);
-                // The body's test in every tile ([`BodyCull::hides`]).
+                // The body's test in every tile ([`BodyCull::keeps`]).
                 let zmin = BodyCull::depth(p, q);
                 let mut kept = false;
                 if x1 - x0 < 2 && y1 - y0 < 2 {
@@ -204,7 +204,7 @@ impl HalfBins {
                     let tiles = [y0 * w + x0, y0 * w + x1, y1 * w + x0, y1 * w + x1];
                     let distinct = [true, x1 != x0, y1 != y0, x1 != x0 && y1 != y0];
                     for (&t, &new) in tiles.iter().zip(&distinct) {
-                        let keep = new & (zmin < cull.far[t]);
+                        let keep = new & cull.keeps(t, zmin);
                         let len = self.pairs.len();
                         // SAFETY: 4 entries were reserved above, and at most 4 are added.
                         unsafe {
@@ -218,7 +218,7 @@ impl HalfBins {
                     for ty in y0..y1 + 1 {
                         for tx in x0..x1 + 1 {
                             let t = ty * grid.tiles_x + tx;
-                            if cull.hides(t, p, q) {
+                            if !cull.keeps(t, zmin) {
                                 continue;
                             }
                             self.start[t + 1] += 1;

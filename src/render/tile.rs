@@ -774,8 +774,8 @@ pub(crate) struct BodyCull<'a> {
 }
 
 impl BodyCull<'_> {
-    /// The depth that [`BodyCull::hides`] compares: the segment's nearest, or infinity for
-    /// a segment with no length, which draws nothing anywhere.
+    /// The depth that [`BodyCull::keeps`] compares for segment a–b: its nearest, or infinity
+    /// for a segment with no length, which draws nothing anywhere.
     #[inline(always)]
     pub fn depth(a: &ScreenVertex, b: &ScreenVertex) -> f32 {
         if a.x != b.x || a.y != b.y {
@@ -785,14 +785,14 @@ impl BodyCull<'_> {
         }
     }
 
-    /// Whether the body alone hides segment a–b in tile `t`, a tile its box reaches: it has
-    /// no length, or lies at or behind the body's farthest depth over the tile. Only the
+    /// Whether binning keeps a segment of [`BodyCull::depth`] `depth` in tile `t`, a tile its
+    /// box reaches: it lies in front of the body's farthest depth over the tile. Only the
     /// whole tile's test: the finer ones cost more here than binning the segment (the tile
     /// pass makes them anyway), and whatever this keeps, the tile pass's own first test
     /// still culls.
     #[inline(always)]
-    pub fn hides(&self, t: usize, a: &ScreenVertex, b: &ScreenVertex) -> bool {
-        Self::depth(a, b) >= self.far[t]
+    pub fn keeps(&self, t: usize, depth: f32) -> bool {
+        depth < self.far[t]
     }
 }
 
@@ -982,11 +982,12 @@ mod tests {
             at(&view, [0.01, 0.0, 0.097]),
         );
         let cull = BodyCull { far: &[layer.far] };
-        assert!(cull.hides(0, &behind.0, &behind.1));
-        assert!(!cull.hides(0, &in_front.0, &in_front.1));
-        assert!(!cull.hides(0, &grazing.0, &grazing.1));
+        let keeps = |(a, b): (ScreenVertex, ScreenVertex)| cull.keeps(0, BodyCull::depth(&a, &b));
+        assert!(!keeps(behind));
+        assert!(keeps(in_front));
+        assert!(keeps(grazing));
         // A segment with no length draws nothing anywhere.
-        assert!(cull.hides(0, &in_front.0, &in_front.0));
+        assert!(!keeps((in_front.0, in_front.0)));
     }
 
     #[test]
