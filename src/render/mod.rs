@@ -17,7 +17,9 @@
 //! 4. **Resolve** ([`resolve`]): body or background behind the hair, box filter per pixel,
 //!    3×3 postfilter, sRGB.
 //!
-//! The stage times report the shading with the projection ([`StageTimes::shading`]).
+//! The stage times report the shading with the projection ([`StageTimes::shading`]). The
+//! stages' jobs share rounds on the thread pool ([`Renderer::render`]), so each stage's time
+//! is its share of the work done, of the frame's wall time: on one thread, the time it took.
 //!
 //! The hot loops are compiled twice, for the baseline x86-64 and for AVX2, and chosen at run
 //! time (`pool::multiversion!`); no fused multiply-add is enabled, so both give the same
@@ -40,7 +42,7 @@ pub mod shadow;
 mod tile;
 
 use std::path::Path;
-use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::Mutex;
 use std::time::{Duration, Instant};
 
@@ -86,7 +88,8 @@ impl Image {
     }
 }
 
-/// Wall-clock time of each stage of the last frame.
+/// Each stage's share of the last frame's wall-clock time (its share of the work done by all
+/// threads; on one thread, the time it took).
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct StageTimes {
     /// Building the 16 opacity shadow maps.
@@ -126,6 +129,20 @@ pub fn default_threads() -> usize {
 /// tiles) and of the gather and postfilter (bands of rows).
 const CHUNKS: usize = 16;
 
+/// Indices of [`Renderer::stage_ns`], one per field of [`StageTimes`].
+const SHADOW: usize = 0;
+const SHADING: usize = 1;
+const RASTER: usize = 2;
+const RESOLVE: usize = 3;
+
+/// Runs `f`, adding the nanoseconds it took to `ns`.
+fn timed<R>(ns: &AtomicU64, f: impl FnOnce() -> R) -> R {
+    let t = Instant::now();
+    let r = f();
+    ns.fetch_add(t.elapsed().as_nanos() as u64, Ordering::Relaxed);
+    r
+}
+
 struct Worker {
     buf: TileBuf,
     sorted: Vec<raster::SegRec>,
@@ -133,8 +150,6 @@ struct Worker {
     keys: Vec<u16>,
     buckets: [u32; 257],
     order: Vec<u64>,
-    raster_ns: u64,
-    resolve_ns: u64,
 }
 
 /// The renderer: owns every buffer, a pool of threads, and the parameters.
@@ -165,6 +180,13 @@ pub struct Renderer {
     band_scratch: [Mutex<Vec<f32>>; CHUNKS],
     lut: Vec<u8>,
     times: StageTimes,
+    /// Nanoseconds of work in each stage this frame, summed over the threads ([`SHADOW`],
+    /// [`SHADING`], [`RASTER`], [`RESOLVE`]).
+    stage_ns: [AtomicU64; 4],
+    /// This frame's tiles no hair reaches.
+    bare: Vec<u32>,
+    /// This frame's tiles with hair, with their number of segments, the most first.
+    hairy: Vec<(u32, u32)>,
     /// Per-strand linear colours; empty: every strand has `params.hair_color`.
     strand_colors: Vec<[f32; 3]>,
 }
@@ -206,8 +228,6 @@ impl Renderer {
                     keys: Vec::new(),
                     buckets: [0; 257],
                     order: Vec::new(),
-                    raster_ns: 0,
-                    resolve_ns: 0,
                 })
             })
             .collect();
@@ -234,6 +254,9 @@ impl Renderer {
             band_scratch: Default::default(),
             lut: shading::srgb_lut(),
             times: StageTimes::default(),
+            stage_ns: Default::default(),
+            bare: Vec::new(),
+            hairy: Vec::new(),
             strand_colors: Vec::new(),
         })
     }
@@ -265,54 +288,66 @@ impl Renderer {
     }
 
     /// Renders `input` seen by `camera` into `out` (resized to the renderer's size).
+    ///
+    /// The frame is a few rounds of jobs on the pool, each round waiting for the last. Work
+    /// that does not depend on the previous round shares a round with it, so that a thread
+    /// done with its share of one kind of work takes jobs of another instead of waiting (the
+    /// strands' halves are one job each, and on a shared machine one thread is often slower):
+    ///
+    /// 1. the light-space transform, the projection, the body cast;
+    /// 2. the shadow deposits (two halves) and the binning count (two halves);
+    /// 3. the front-to-back sums of the maps;
+    /// 4. the point shading;
+    /// 5. the binning fill (two halves) and the tiles that no hair reaches;
+    /// 6. the tiles with hair, those with the most segments first;
+    /// 7. the gather, then the postfilter.
     pub fn render(&mut self, input: &RenderInput, camera: &Camera, out: &mut Image) {
+        let t0 = Instant::now();
+        for ns in &self.stage_ns {
+            ns.store(0, Ordering::Relaxed);
+        }
         let ss = self.grid.ss;
         let view = View::new(camera, self.width * ss as u32, self.height * ss as u32);
         let light = normalize(self.params.light_dir);
-        let (strand_width, strands) = (self.params.strand_width, input.strands);
-
-        let t0 = Instant::now();
-        self.maps
-            .build_with(&strands.points, &strands.offsets, light, Some(&self.pool));
-        let t1 = Instant::now();
-        self.project(strands, &view);
-        let t2 = Instant::now();
+        let strands = input.strands;
         let (ws, hs) = (
             (self.width as usize * ss) as f32,
             (self.height as usize * ss) as f32,
         );
         body::prims(input.body, &view, ws, hs, &mut self.prims);
-        self.cast_body(&view);
-        let half = 0.5 * strand_width * ss as f32;
+        let half = 0.5 * self.params.strand_width * ss as f32;
         let reach = half * 1.5 + 1.0;
-        self.count(&strands.offsets, reach);
-        let t2a = Instant::now();
-        self.shade(strands, &view, light);
-        let t2b = Instant::now();
-        self.fill();
-        let t3 = Instant::now();
-        self.tile_pass(&view, light, half);
-        let t4 = Instant::now();
-        self.finish(out);
-        let t5 = Instant::now();
 
-        let (mut rn, mut sn) = (0u64, 0u64);
-        for w in &mut self.workers {
-            let w = w.get_mut().unwrap_or_else(|e| e.into_inner());
-            rn += std::mem::take(&mut w.raster_ns);
-            sn += std::mem::take(&mut w.resolve_ns);
-        }
-        let pass = (t4 - t3).as_secs_f64();
-        let frac = if rn + sn > 0 {
-            rn as f64 / (rn + sn) as f64
-        } else {
-            0.5
+        self.transform(strands, &view, light);
+        self.deposit_and_count(&strands.offsets, reach);
+        let sums = self.maps.sums();
+        let ns = &self.stage_ns;
+        self.pool
+            .for_each(shadow::Sum::BANDS, &|c| timed(&ns[SHADOW], || sums.run(c)));
+        self.shade(strands, &view, light);
+        self.tile_pass(&view, light, half);
+        self.finish(out);
+
+        // Each stage's share of the work, of the frame's wall time (on one thread, the time
+        // each took).
+        let wall = t0.elapsed().as_secs_f64();
+        let ns = self
+            .stage_ns
+            .each_ref()
+            .map(|n| n.load(Ordering::Relaxed) as f64);
+        let total: f64 = ns.iter().sum();
+        let part = |k: usize| {
+            Duration::from_secs_f64(if total > 0.0 {
+                wall * ns[k] / total
+            } else {
+                0.0
+            })
         };
         self.times = StageTimes {
-            shadow_maps: t1 - t0,
-            shading: (t2 - t1) + (t2b - t2a),
-            rasterising: (t2a - t2) + (t3 - t2b) + Duration::from_secs_f64(pass * frac),
-            resolve: Duration::from_secs_f64(pass * (1.0 - frac)) + (t5 - t4),
+            shadow_maps: part(SHADOW),
+            shading: part(SHADING),
+            rasterising: part(RASTER),
+            resolve: part(RESOLVE),
         };
     }
 
@@ -329,22 +364,99 @@ impl Renderer {
         }
     }
 
-    /// Projects every strand point.
-    fn project(&mut self, strands: &StrandBuf, view: &View) {
+    /// Round 1: every strand point to the light frame (and their bounds) and to the screen,
+    /// and the body cast into every tile's [`tile::BodyLayer`] (runs of tiles); then the maps
+    /// are spread over the points' bounds.
+    fn transform(&mut self, strands: &StrandBuf, view: &View, light: [f32; 3]) {
         // Every vertex is written below: resized, not cleared.
         self.verts
             .resize(strands.points.len(), ScreenVertex::default());
-        let parts = split_by_strands::<_, CHUNKS>(&mut self.verts, &strands.offsets);
-        let job = |c: usize| {
-            let mut g = parts[c].lock().unwrap_or_else(|e| e.into_inner());
-            let (first, ref mut out) = *g;
-            project_points(view, &strands.points[first..first + out.len()], out);
+        let nt = self.grid.tiles();
+        self.layers.resize_with(nt, Default::default);
+        let frame = self.maps.light_frame(&strands.points, light);
+        let screen = split_by_strands::<_, CHUNKS>(&mut self.verts, &strands.offsets);
+        let runs = pool::split_parts::<_, CHUNKS>(&mut self.layers, |c| (c + 1) * nt / CHUNKS);
+        let (grid, prims, workers, ns) = (self.grid, &self.prims, &self.workers, &self.stage_ns);
+        let (n_light, n_screen) = (shadow::LightFrame::CHUNKS, CHUNKS);
+        let job = |k: usize, i: usize| {
+            if i < n_light {
+                timed(&ns[SHADOW], || frame.run(i));
+            } else if i < n_light + n_screen {
+                timed(&ns[SHADING], || {
+                    let mut g = screen[i - n_light]
+                        .lock()
+                        .unwrap_or_else(|e| e.into_inner());
+                    let (first, ref mut out) = *g;
+                    project_points(view, &strands.points[first..first + out.len()], out);
+                });
+            } else {
+                timed(&ns[RASTER], || {
+                    let mut w = workers[k].lock().unwrap_or_else(|e| e.into_inner());
+                    let c = i - n_light - n_screen;
+                    let mut g = runs[c].lock().unwrap_or_else(|e| e.into_inner());
+                    let (t0, ref mut run) = *g;
+                    for (j, layer) in run.iter_mut().enumerate() {
+                        let origin = grid.origin(t0 + j);
+                        let layer = layer.get_mut().unwrap_or_else(|e| e.into_inner());
+                        w.buf
+                            .cast_layer(grid.tile_samples(), origin, view, prims, layer);
+                    }
+                });
+            }
         };
-        self.pool.for_each(CHUNKS, &job);
+        self.pool.for_each_worker(n_light + n_screen + CHUNKS, &job);
+        let (lo, hi) = frame.bounds();
+        self.maps.set_extent(lo, hi, strands.points.is_empty());
     }
 
-    /// Shades every strand point that a binned segment uses (`needed`); the others keep a
-    /// stale colour that nothing reads.
+    /// Round 2: the shadow deposits, and the binning count (the segments into the tiles they
+    /// touch, less those the body hides there; the points of the binned segments marked as
+    /// `needed`), each in two halves of the strands.
+    fn deposit_and_count(&mut self, offsets: &[u32], reach: f32) {
+        let ns_strands = offsets.len().saturating_sub(1);
+        let n = offsets.last().map_or(0, |&e| e as usize);
+        self.needed.clear();
+        self.needed.resize(n, 0);
+        self.far.clear();
+        self.far.extend(
+            self.layers
+                .iter_mut()
+                .map(|l| l.get_mut().unwrap_or_else(|e| e.into_inner()).far),
+        );
+        let deposits = self.maps.deposits(offsets);
+        let parts = split_by_strands::<_, 2>(&mut self.needed, offsets);
+        let (verts, grid, halves) = (&self.verts, &self.grid, &self.bins.halves);
+        let cull = tile::BodyCull { far: &self.far };
+        let ns = &self.stage_ns;
+        let job = |i: usize| {
+            // The deposits first: the longer jobs.
+            if i < shadow::Deposit::HALVES {
+                timed(&ns[SHADOW], || deposits.run(i));
+                return;
+            }
+            let h = i - shadow::Deposit::HALVES;
+            timed(&ns[RASTER], || {
+                let mut b = halves[h].lock().unwrap_or_else(|e| e.into_inner());
+                let mut g = parts[h].lock().unwrap_or_else(|e| e.into_inner());
+                let (base, ref mut needed) = *g;
+                let strands = h * ns_strands / 2..(h + 1) * ns_strands / 2;
+                count_half(
+                    &mut b,
+                    verts,
+                    offsets,
+                    strands,
+                    grid,
+                    reach,
+                    &cull,
+                    (base, needed),
+                );
+            });
+        };
+        self.pool.for_each(shadow::Deposit::HALVES + 2, &job);
+    }
+
+    /// Round 4: shades every strand point that a binned segment uses (`needed`); the others
+    /// keep a stale colour that nothing reads.
     fn shade(&mut self, strands: &StrandBuf, view: &View, light: [f32; 3]) {
         let shade = point_colors::PointShader {
             maps: &self.maps,
@@ -356,92 +468,23 @@ impl Renderer {
         // Written where needed, read only there: resized, not cleared.
         self.colors.resize(strands.points.len(), 0);
         let needed = &self.needed;
-        let ns = strands.len();
+        let n_strands = strands.len();
         let parts = split_by_strands::<_, CHUNKS>(&mut self.colors, &strands.offsets);
+        let ns = &self.stage_ns;
         let job = |c: usize| {
-            let mut g = parts[c].lock().unwrap_or_else(|e| e.into_inner());
-            let (base, ref mut colors) = *g;
-            let range = c * ns / CHUNKS..(c + 1) * ns / CHUNKS;
-            shade_strands(&shade, strands, range, base, needed, colors);
+            timed(&ns[SHADING], || {
+                let mut g = parts[c].lock().unwrap_or_else(|e| e.into_inner());
+                let (base, ref mut colors) = *g;
+                let range = c * n_strands / CHUNKS..(c + 1) * n_strands / CHUNKS;
+                shade_strands(&shade, strands, range, base, needed, colors);
+            });
         };
         self.pool.for_each(CHUNKS, &job);
     }
 
-    /// Casts the body into every tile's [`tile::BodyLayer`], in CHUNKS runs of tiles.
-    fn cast_body(&mut self, view: &View) {
-        let (grid, prims) = (self.grid, &self.prims);
-        let nt = grid.tiles();
-        self.layers.resize_with(nt, Default::default);
-        let runs = pool::split_parts::<_, CHUNKS>(&mut self.layers, |c| (c + 1) * nt / CHUNKS);
-        let workers = &self.workers;
-        let next = AtomicUsize::new(0);
-        let job = |k: usize| {
-            let mut w = workers[k].lock().unwrap_or_else(|e| e.into_inner());
-            loop {
-                let c = next.fetch_add(1, Ordering::Relaxed);
-                if c >= CHUNKS {
-                    break;
-                }
-                let mut g = runs[c].lock().unwrap_or_else(|e| e.into_inner());
-                let (t0, ref mut run) = *g;
-                for (k, layer) in run.iter_mut().enumerate() {
-                    let origin = grid.origin(t0 + k);
-                    let layer = layer.get_mut().unwrap_or_else(|e| e.into_inner());
-                    w.buf
-                        .cast_layer(grid.tile_samples(), origin, view, prims, layer);
-                }
-            }
-        };
-        self.pool.run(&job);
-    }
-
-    /// Bins the segments into tiles, leaving out of each tile those the body hides there, and
-    /// marks the points of the binned segments as `needed`: the two halves of the strands
-    /// counted, by the pool's threads.
-    fn count(&mut self, offsets: &[u32], reach: f32) {
-        let ns = offsets.len().saturating_sub(1);
-        let n = offsets.last().map_or(0, |&e| e as usize);
-        self.needed.clear();
-        self.needed.resize(n, 0);
-        let parts = split_by_strands::<_, 2>(&mut self.needed, offsets);
-        let (verts, grid, halves) = (&self.verts, &self.grid, &self.bins.halves);
-        self.far.clear();
-        self.far.extend(
-            self.layers
-                .iter_mut()
-                .map(|l| l.get_mut().unwrap_or_else(|e| e.into_inner()).far),
-        );
-        let cull = tile::BodyCull { far: &self.far };
-        let count = |h: usize| {
-            let mut b = halves[h].lock().unwrap_or_else(|e| e.into_inner());
-            let mut g = parts[h].lock().unwrap_or_else(|e| e.into_inner());
-            let (base, ref mut needed) = *g;
-            let strands = h * ns / 2..(h + 1) * ns / 2;
-            count_half(
-                &mut b,
-                verts,
-                offsets,
-                strands,
-                grid,
-                reach,
-                &cull,
-                (base, needed),
-            );
-        };
-        self.pool.for_each(2, &count);
-    }
-
-    /// Fills the tile lists counted by [`Renderer::count`], with the points' colours.
-    fn fill(&mut self) {
-        let (verts, colors, grid, halves) =
-            (&self.verts, &self.colors, &self.grid, &self.bins.halves);
-        let fill = |h: usize| {
-            let mut b = halves[h].lock().unwrap_or_else(|e| e.into_inner());
-            fill_half(&mut b, verts, colors, grid);
-        };
-        self.pool.for_each(2, &fill);
-    }
-
+    /// Rounds 5 and 6: the binning fill (the tile lists counted in round 2, with the points'
+    /// colours) and the tiles no hair reaches; then the tiles with hair, the most segments
+    /// first (the longest jobs first, so that no thread is left with a long one at the end).
     fn tile_pass(&mut self, view: &View, light: [f32; 3], half: f32) {
         let p = &self.params;
         let resolve = resolve::Resolve {
@@ -457,7 +500,51 @@ impl Renderer {
         };
         let alpha = p.strand_alpha;
         let grid = self.grid;
-        let next = AtomicUsize::new(0);
+        let nt = grid.tiles();
+        let (workers, tiles, layers, ns) =
+            (&self.workers, &self.tiles, &self.layers, &self.stage_ns);
+        {
+            let [h0, h1] = &mut self.bins.halves;
+            let halves = [
+                &*h0.get_mut().unwrap_or_else(|e| e.into_inner()),
+                &*h1.get_mut().unwrap_or_else(|e| e.into_inner()),
+            ];
+            self.bare.clear();
+            self.hairy.clear();
+            for t in 0..nt {
+                let segs = halves[0].tile_len(t) + halves[1].tile_len(t);
+                if segs == 0 {
+                    self.bare.push(t as u32);
+                } else {
+                    self.hairy.push((segs as u32, t as u32));
+                }
+            }
+            self.hairy
+                .sort_unstable_by_key(|&(segs, t)| (std::cmp::Reverse(segs), t));
+        }
+        let (verts, colors, halves, bare) =
+            (&self.verts, &self.colors, &self.bins.halves, &self.bare);
+        let fill = |k: usize, i: usize| {
+            if i < 2 {
+                timed(&ns[RASTER], || {
+                    let mut b = halves[i].lock().unwrap_or_else(|e| e.into_inner());
+                    fill_half(&mut b, verts, colors, &grid);
+                });
+                return;
+            }
+            timed(&ns[RESOLVE], || {
+                let t = bare[i - 2] as usize;
+                let mut w = workers[k].lock().unwrap_or_else(|e| e.into_inner());
+                let mut layer = layers[t].lock().unwrap_or_else(|e| e.into_inner());
+                // No hair here (most of the frame, around the figure): nothing to clear or
+                // draw.
+                w.buf.take_body(grid.tile_samples(), &mut layer);
+                let mut out = tiles[t].lock().unwrap_or_else(|e| e.into_inner());
+                resolve.tile(&w.buf, grid.ss, &mut out);
+            });
+        };
+        self.pool.for_each_worker(2 + bare.len(), &fill);
+
         let [h0, h1] = &mut self.bins.halves;
         let halves = [
             &*h0.get_mut().unwrap_or_else(|e| e.into_inner()),
@@ -467,31 +554,25 @@ impl Renderer {
             let ((lo0, hi0), (lo1, hi1)) = (halves[0].depth_range(), halves[1].depth_range());
             raster::DepthKey::new(lo0.min(lo1), hi0.max(hi1))
         };
-        let (workers, tiles) = (&self.workers, &self.tiles);
         let setup = TileSetup {
             grid,
-            layers: &self.layers,
+            layers,
             halves,
             key,
             half,
             alpha,
             resolve: &resolve,
         };
-        let job = |k: usize| {
+        let hairy = &self.hairy;
+        let job = |k: usize, i: usize| {
+            let t = hairy[i].1 as usize;
             let mut w = workers[k].lock().unwrap_or_else(|e| e.into_inner());
-            let w = &mut *w;
-            loop {
-                let t = next.fetch_add(1, Ordering::Relaxed);
-                if t >= grid.tiles() {
-                    break;
-                }
-                let mut out = tiles[t].lock().unwrap_or_else(|e| e.into_inner());
-                let (rn, sn) = render_tile(w, t, &setup, &mut out);
-                w.raster_ns += rn;
-                w.resolve_ns += sn;
-            }
+            let mut out = tiles[t].lock().unwrap_or_else(|e| e.into_inner());
+            let (rn, sn) = render_tile(&mut w, t, &setup, &mut out);
+            ns[RASTER].fetch_add(rn, Ordering::Relaxed);
+            ns[RESOLVE].fetch_add(sn, Ordering::Relaxed);
         };
-        self.pool.run(&job);
+        self.pool.for_each_worker(hairy.len(), &job);
     }
 
     /// Gathers the tiles' linear pixels into the frame, then postfilters and encodes it into
@@ -525,7 +606,8 @@ impl Renderer {
                 }
             }
         };
-        self.pool.for_each(CHUNKS, &gather);
+        let ns = &self.stage_ns[RESOLVE];
+        self.pool.for_each(CHUNKS, &|c| timed(ns, || gather(c)));
         out.width = self.width;
         out.height = self.height;
         out.rgb.resize(w * h * 3, 0);
@@ -539,7 +621,8 @@ impl Renderer {
             let mut row = scratch[c].lock().unwrap_or_else(|e| e.into_inner());
             resolve::postfilter_rows((linear, w, h), y0..y1, s, lut, band, &mut row);
         };
-        self.pool.for_each(CHUNKS, &job);
+        let ns = &self.stage_ns[RESOLVE];
+        self.pool.for_each(CHUNKS, &|c| timed(ns, || job(c)));
     }
 }
 
@@ -555,19 +638,12 @@ struct TileSetup<'a> {
 }
 
 pool::multiversion! {
-    /// Renders tile `t` with worker `w`'s buffers into `out` (its resolved linear pixels);
-    /// returns the nanoseconds spent rasterising and resolving.
+    /// Renders tile `t`, which has hair, with worker `w`'s buffers into `out` (its resolved
+    /// linear pixels); returns the nanoseconds spent rasterising and resolving.
     fn render_tile(w: &mut Worker, t: usize, f: &TileSetup, out: &mut [f32]) -> (u64, u64) {
         let r0 = Instant::now();
         let mut layer = f.layers[t].lock().unwrap_or_else(|e| e.into_inner());
         let (first, second) = (f.halves[0].tile(t), f.halves[1].tile(t));
-        if first.is_empty() && second.is_empty() {
-            // No hair here (most of the frame, around the figure): nothing to clear or draw.
-            w.buf.take_body(f.grid.tile_samples(), &mut layer);
-            let r1 = Instant::now();
-            f.resolve.tile(&w.buf, f.grid.ss, out);
-            return ((r1 - r0).as_nanos() as u64, r1.elapsed().as_nanos() as u64);
-        }
         w.buf.reset_with(f.grid.tile_samples(), &mut layer);
         let n_segs = raster::bucket_tile(
             first,

@@ -106,13 +106,19 @@ impl Pool {
     /// taken, and returns when all are done. Which worker does an item varies from run to run,
     /// so `f` must not depend on it.
     pub fn for_each(&self, n: usize, f: &(dyn Fn(usize) + Sync)) {
+        self.for_each_worker(n, &|_k, i| f(i));
+    }
+
+    /// [`Pool::for_each`], `f(k, i)` told which worker k runs item i (to use that worker's
+    /// scratch buffers).
+    pub fn for_each_worker(&self, n: usize, f: &(dyn Fn(usize, usize) + Sync)) {
         let next = AtomicUsize::new(0);
-        self.run(&|_k| loop {
+        self.run(&|k| loop {
             let i = next.fetch_add(1, Ordering::Relaxed);
             if i >= n {
                 break;
             }
-            f(i);
+            f(k, i);
         });
     }
 }

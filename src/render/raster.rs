@@ -263,6 +263,11 @@ impl HalfBins {
         (self.zlo, self.zhi)
     }
 
+    /// Number of tile `t`'s segments (known from the count on, before the fill).
+    pub fn tile_len(&self, t: usize) -> usize {
+        (self.start[t + 1] - self.start[t]) as usize
+    }
+
     /// Tile `t`'s segments.
     pub fn tile(&self, t: usize) -> &[SegRec] {
         &self.items[self.start[t] as usize..self.start[t + 1] as usize]

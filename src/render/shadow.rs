@@ -88,164 +88,157 @@ super::pool::multiversion! {
 }
 
 super::pool::multiversion! {
-    /// Deposits every segment of strands `range` (points in `maps.lp`) into `m`.
-    fn deposit_strands(maps: &ShadowMaps, m: &mut [f32], offsets: &[u32], range: std::ops::Range<usize>) {
+    /// Scales the light-space points `lp` (u, v in metres) to texels, then deposits every
+    /// segment of strands `range` (their points in `lp`, which starts at point `base`) into
+    /// `m`.
+    fn deposit_strands(
+        splat: &Splat,
+        m: &mut [f32],
+        lp: (usize, &mut [[f32; 3]]),
+        offsets: &[u32],
+        range: std::ops::Range<usize>,
+    ) {
+        let (base, lp) = lp;
+        for q in lp.iter_mut() {
+            q[0] = (q[0] - splat.u0) * splat.inv_texel;
+            q[1] = (q[1] - splat.v0) * splat.inv_texel;
+        }
         for s in range {
-            let (a, b) = (offsets[s] as usize, offsets[s + 1] as usize);
+            let (a, b) = (offsets[s] as usize - base, offsets[s + 1] as usize - base);
             for i in a..b.saturating_sub(1) {
-                maps.deposit(m, maps.lp[i], maps.lp[i + 1]);
+                splat.deposit(m, lp[i], lp[i + 1]);
             }
         }
     }
 }
 
-impl ShadowMaps {
-    /// Empty maps of `size`² texels each.
-    pub fn new(size: usize) -> ShadowMaps {
-        ShadowMaps {
-            size,
-            ax_u: [1.0, 0.0, 0.0],
-            ax_v: [0.0, 0.0, 1.0],
-            ax_d: [0.0, -1.0, 0.0],
-            u0: 0.0,
-            v0: 0.0,
-            inv_texel: 1.0,
-            z0: 0.0,
-            dz: 1.0,
-            inv_dz: 1.0,
-            omega: vec![0.0; size * size * MAPS],
-            lp: Vec::new(),
-            partial: Default::default(),
-        }
+/// What a deposit needs of the frame's light frame (a copy, so that the deposits can write
+/// the light-space points while they read it).
+#[derive(Debug, Clone, Copy)]
+struct Splat {
+    size: usize,
+    u0: f32,
+    v0: f32,
+    inv_texel: f32,
+    z0: f32,
+    inv_dz: f32,
+}
+
+/// A run of light-space points with the index of its first point, behind its own lock.
+type PointRun<'a> = Mutex<(usize, &'a mut [[f32; 3]])>;
+
+/// The light-space transform of a frame's points, in [`LightFrame::CHUNKS`] jobs that any
+/// threads may run at once ([`ShadowMaps::light_frame`]).
+pub(crate) struct LightFrame<'a> {
+    points: &'a [[f32; 3]],
+    axes: [[f32; 3]; 3],
+    parts: [PointRun<'a>; FRAME_CHUNKS],
+    /// Per chunk, the bounds of its points.
+    bounds: [Mutex<([f32; 3], [f32; 3])>; FRAME_CHUNKS],
+}
+
+impl LightFrame<'_> {
+    /// Number of jobs.
+    pub const CHUNKS: usize = FRAME_CHUNKS;
+
+    /// Job `c`: its points in the light frame (u, v, depth in metres), and their bounds.
+    pub fn run(&self, c: usize) {
+        let mut g = self.parts[c].lock().unwrap_or_else(|e| e.into_inner());
+        let (p0, ref mut out) = *g;
+        let mut b = self.bounds[c].lock().unwrap_or_else(|e| e.into_inner());
+        let (lo, hi) = &mut *b;
+        to_light_frame(&self.points[p0..], self.axes, out, lo, hi);
     }
 
-    /// Distance between two maps, metres.
-    pub fn spacing(&self) -> f32 {
-        self.dz
-    }
-
-    /// Builds the maps for strands `points`/`offsets` lit from direction `to_light`, on the
-    /// calling thread.
-    pub fn build(&mut self, points: &[[f32; 3]], offsets: &[u32], to_light: [f32; 3]) {
-        self.build_with(points, offsets, to_light, None);
-    }
-
-    /// [`ShadowMaps::build`], the two halves of the strands deposited by the pool's threads.
-    /// Each half has its own maps, summed half 0 + half 1 afterwards, so the result does not
-    /// depend on the number of threads.
-    pub(crate) fn build_with(
-        &mut self,
-        points: &[[f32; 3]],
-        offsets: &[u32],
-        to_light: [f32; 3],
-        pool: Option<&super::pool::Pool>,
-    ) {
-        self.frame(points, to_light, pool);
-        let ns = offsets.len().saturating_sub(1);
-        let me = &*self;
-        let job = |h: usize| {
-            let mut m = me.partial[h].lock().unwrap_or_else(|e| e.into_inner());
-            m.clear();
-            m.resize(me.size * me.size * MAPS, 0.0);
-            deposit_strands(me, &mut m, offsets, h * ns / HALVES..(h + 1) * ns / HALVES);
-        };
-        for_each_on(pool, HALVES, &job);
-        let [p0, p1] = &mut self.partial;
-        let (p0, p1) = (
-            &*p0.get_mut().unwrap_or_else(|e| e.into_inner()),
-            &*p1.get_mut().unwrap_or_else(|e| e.into_inner()),
-        );
-        // Ω_i = everything deposited into maps 0..=i, in bands of texel rows on the pool (each
-        // texel's sum is the same whoever does it).
-        let row = self.size * MAPS;
-        let rows = self.size;
-        let bands =
-            split_parts::<_, SUM_BANDS>(&mut self.omega, |c| (c + 1) * rows / SUM_BANDS * row);
-        let plane = self.size * self.size;
-        let sum = |c: usize| {
-            let mut g = bands[c].lock().unwrap_or_else(|e| e.into_inner());
-            let (at, ref mut out) = *g;
-            // From the map-major deposits to texel-major opacities (a lookup reads every map
-            // of a texel from one cache line).
-            // Runs of 64 texels, map by map, so that the reads are contiguous.
-            const RUN: usize = 64;
-            let first = at / MAPS;
-            for (k, run) in out.chunks_mut(RUN * MAPS).enumerate() {
-                let t0 = first + k * RUN;
-                let len = run.len() / MAPS;
-                let mut acc = [0.0f32; RUN];
-                for i in 0..MAPS {
-                    let (a, b) = (
-                        &p0[i * plane + t0..i * plane + t0 + len],
-                        &p1[i * plane + t0..i * plane + t0 + len],
-                    );
-                    for (j, (x, y)) in a.iter().zip(b).enumerate() {
-                        acc[j] += x + y;
-                        run[j * MAPS + i] = acc[j];
-                    }
-                }
-            }
-        };
-        for_each_on(pool, SUM_BANDS, &sum);
-    }
-
-    /// Sets up the light frame around the hair and the light-space points (in chunks on
-    /// `pool`, if any: the bounds of each chunk, then the points scaled to texels).
-    fn frame(&mut self, points: &[[f32; 3]], to_light: [f32; 3], pool: Option<&super::pool::Pool>) {
-        let d = normalize([-to_light[0], -to_light[1], -to_light[2]]);
-        let helper = if d[1].abs() < 0.9 {
-            [0.0, 1.0, 0.0]
-        } else {
-            [1.0, 0.0, 0.0]
-        };
-        let u = normalize(cross(helper, d));
-        let v = cross(d, u);
-        (self.ax_u, self.ax_v, self.ax_d) = (u, v, d);
-        // Every point is written below: resized, not cleared.
-        self.lp.resize(points.len(), [0.0; 3]);
-        let n = points.len();
-        let parts = split_parts::<_, FRAME_CHUNKS>(&mut self.lp, |c| (c + 1) * n / FRAME_CHUNKS);
-        // Per chunk, the bounds of its points.
-        let bounds: [Mutex<([f32; 3], [f32; 3])>; FRAME_CHUNKS] =
-            std::array::from_fn(|_| Mutex::new(([f32::INFINITY; 3], [f32::NEG_INFINITY; 3])));
-        let project = |c: usize| {
-            let mut g = parts[c].lock().unwrap_or_else(|e| e.into_inner());
-            let (p0, ref mut out) = *g;
-            let mut b = bounds[c].lock().unwrap_or_else(|e| e.into_inner());
-            let (lo, hi) = &mut *b;
-            to_light_frame(&points[p0..], [u, v, d], out, lo, hi);
-        };
-        for_each_on(pool, FRAME_CHUNKS, &project);
+    /// The bounds of every point, once every job has run.
+    pub fn bounds(&self) -> ([f32; 3], [f32; 3]) {
         let (mut lo, mut hi) = ([f32::INFINITY; 3], [f32::NEG_INFINITY; 3]);
-        for b in &bounds {
+        for b in &self.bounds {
             let (l, h) = *b.lock().unwrap_or_else(|e| e.into_inner());
             for a in 0..3 {
                 lo[a] = lo[a].min(l[a]);
                 hi[a] = hi[a].max(h[a]);
             }
         }
-        if points.is_empty() {
-            (lo, hi) = ([0.0; 3], [1.0; 3]);
-        }
-        let size = self.size as f32;
-        let extent = (hi[0] - lo[0]).max(hi[1] - lo[1]).max(1e-4);
-        // One texel of margin on each side, so that bilinear splats stay inside.
-        let inv_texel = (size - 3.0) / extent;
-        let (u0, v0) = (lo[0] - 1.0 / inv_texel, lo[1] - 1.0 / inv_texel);
-        let to_texels = |c: usize| {
-            let mut g = parts[c].lock().unwrap_or_else(|e| e.into_inner());
-            for q in g.1.iter_mut() {
-                q[0] = (q[0] - u0) * inv_texel;
-                q[1] = (q[1] - v0) * inv_texel;
-            }
-        };
-        for_each_on(pool, FRAME_CHUNKS, &to_texels);
-        (self.inv_texel, self.u0, self.v0) = (inv_texel, u0, v0);
-        self.z0 = lo[2];
-        self.dz = ((hi[2] - lo[2]) / (MAPS - 1) as f32).max(1e-5);
-        self.inv_dz = 1.0 / self.dz;
+        (lo, hi)
     }
+}
 
+/// The deposits of a frame's strands, in [`Deposit::HALVES`] jobs that any threads may run at
+/// once ([`ShadowMaps::deposits`]): half h of the strands into its own partial maps.
+pub(crate) struct Deposit<'a> {
+    splat: Splat,
+    offsets: &'a [u32],
+    lp: [PointRun<'a>; HALVES],
+    partial: &'a [Mutex<Vec<f32>>; HALVES],
+}
+
+impl Deposit<'_> {
+    /// Number of jobs.
+    pub const HALVES: usize = HALVES;
+
+    /// Job `h`: half h's points scaled to texels, and its segments deposited.
+    pub fn run(&self, h: usize) {
+        let mut m = self.partial[h].lock().unwrap_or_else(|e| e.into_inner());
+        m.clear();
+        m.resize(self.splat.size * self.splat.size * MAPS, 0.0);
+        let mut lp = self.lp[h].lock().unwrap_or_else(|e| e.into_inner());
+        let (base, ref mut lp) = *lp;
+        let ns = self.offsets.len().saturating_sub(1);
+        deposit_strands(
+            &self.splat,
+            &mut m,
+            (base, lp),
+            self.offsets,
+            h * ns / HALVES..(h + 1) * ns / HALVES,
+        );
+    }
+}
+
+/// The front-to-back sums of the partial maps into Ω, in [`Sum::BANDS`] jobs of texel rows
+/// that any threads may run at once ([`ShadowMaps::sums`]): each texel's sum is the same
+/// whoever does it.
+pub(crate) struct Sum<'a> {
+    size: usize,
+    bands: [Mutex<(usize, &'a mut [f32])>; SUM_BANDS],
+    p0: &'a [f32],
+    p1: &'a [f32],
+}
+
+impl Sum<'_> {
+    /// Number of jobs.
+    pub const BANDS: usize = SUM_BANDS;
+
+    /// Job `c`: Ω_i = everything deposited into maps 0..=i, for band c's texels.
+    pub fn run(&self, c: usize) {
+        let (p0, p1) = (self.p0, self.p1);
+        let plane = self.size * self.size;
+        let mut g = self.bands[c].lock().unwrap_or_else(|e| e.into_inner());
+        let (at, ref mut out) = *g;
+        // From the map-major deposits to texel-major opacities (a lookup reads every map
+        // of a texel from one cache line).
+        // Runs of 64 texels, map by map, so that the reads are contiguous.
+        const RUN: usize = 64;
+        let first = at / MAPS;
+        for (k, run) in out.chunks_mut(RUN * MAPS).enumerate() {
+            let t0 = first + k * RUN;
+            let len = run.len() / MAPS;
+            let mut acc = [0.0f32; RUN];
+            for i in 0..MAPS {
+                let (a, b) = (
+                    &p0[i * plane + t0..i * plane + t0 + len],
+                    &p1[i * plane + t0..i * plane + t0 + len],
+                );
+                for (j, (x, y)) in a.iter().zip(b).enumerate() {
+                    acc[j] += x + y;
+                    run[j * MAPS + i] = acc[j];
+                }
+            }
+        }
+    }
+}
+
+impl Splat {
     /// Deposits segment a–b (light space) into `m`, each piece (at most two texels long) into
     /// the first map behind it.
     #[inline(always)]
@@ -300,6 +293,149 @@ impl ShadowMaps {
             m[base + 1] += w * fx * (1.0 - fy);
             m[base + s] += w * (1.0 - fx) * fy;
             m[base + s + 1] += w * fx * fy;
+        }
+    }
+}
+
+impl ShadowMaps {
+    /// Empty maps of `size`² texels each.
+    pub fn new(size: usize) -> ShadowMaps {
+        ShadowMaps {
+            size,
+            ax_u: [1.0, 0.0, 0.0],
+            ax_v: [0.0, 0.0, 1.0],
+            ax_d: [0.0, -1.0, 0.0],
+            u0: 0.0,
+            v0: 0.0,
+            inv_texel: 1.0,
+            z0: 0.0,
+            dz: 1.0,
+            inv_dz: 1.0,
+            omega: vec![0.0; size * size * MAPS],
+            lp: Vec::new(),
+            partial: Default::default(),
+        }
+    }
+
+    /// Distance between two maps, metres.
+    pub fn spacing(&self) -> f32 {
+        self.dz
+    }
+
+    /// Builds the maps for strands `points`/`offsets` lit from direction `to_light`, on the
+    /// calling thread.
+    pub fn build(&mut self, points: &[[f32; 3]], offsets: &[u32], to_light: [f32; 3]) {
+        self.build_with(points, offsets, to_light, None);
+    }
+
+    /// [`ShadowMaps::build`], each step's jobs run by the pool's threads. The two halves of
+    /// the strands are deposited into maps of their own, summed half 0 + half 1 afterwards, so
+    /// the result does not depend on the number of threads.
+    pub(crate) fn build_with(
+        &mut self,
+        points: &[[f32; 3]],
+        offsets: &[u32],
+        to_light: [f32; 3],
+        pool: Option<&super::pool::Pool>,
+    ) {
+        let frame = self.light_frame(points, to_light);
+        for_each_on(pool, LightFrame::CHUNKS, &|c| frame.run(c));
+        let (lo, hi) = frame.bounds();
+        self.set_extent(lo, hi, points.is_empty());
+        let deposits = self.deposits(offsets);
+        for_each_on(pool, Deposit::HALVES, &|h| deposits.run(h));
+        let sums = self.sums();
+        for_each_on(pool, Sum::BANDS, &|c| sums.run(c));
+    }
+
+    /// Sets up the light frame for light direction `to_light`, and returns the jobs that
+    /// put `points` in it. Then: [`ShadowMaps::set_extent`], [`ShadowMaps::deposits`],
+    /// [`ShadowMaps::sums`], each after the previous step's jobs have all run.
+    pub(crate) fn light_frame<'a>(
+        &'a mut self,
+        points: &'a [[f32; 3]],
+        to_light: [f32; 3],
+    ) -> LightFrame<'a> {
+        let d = normalize([-to_light[0], -to_light[1], -to_light[2]]);
+        let helper = if d[1].abs() < 0.9 {
+            [0.0, 1.0, 0.0]
+        } else {
+            [1.0, 0.0, 0.0]
+        };
+        let u = normalize(cross(helper, d));
+        let v = cross(d, u);
+        (self.ax_u, self.ax_v, self.ax_d) = (u, v, d);
+        // Every point is written by the jobs: resized, not cleared.
+        self.lp.resize(points.len(), [0.0; 3]);
+        let n = points.len();
+        LightFrame {
+            points,
+            axes: [u, v, d],
+            parts: split_parts(&mut self.lp, |c| (c + 1) * n / FRAME_CHUNKS),
+            bounds: std::array::from_fn(|_| {
+                Mutex::new(([f32::INFINITY; 3], [f32::NEG_INFINITY; 3]))
+            }),
+        }
+    }
+
+    /// Spreads the maps over the light-space bounds `lo`..`hi` of the points (`empty`: there
+    /// are none).
+    pub(crate) fn set_extent(&mut self, mut lo: [f32; 3], mut hi: [f32; 3], empty: bool) {
+        if empty {
+            (lo, hi) = ([0.0; 3], [1.0; 3]);
+        }
+        let size = self.size as f32;
+        let extent = (hi[0] - lo[0]).max(hi[1] - lo[1]).max(1e-4);
+        // One texel of margin on each side, so that bilinear splats stay inside.
+        let inv_texel = (size - 3.0) / extent;
+        let (u0, v0) = (lo[0] - 1.0 / inv_texel, lo[1] - 1.0 / inv_texel);
+        (self.inv_texel, self.u0, self.v0) = (inv_texel, u0, v0);
+        self.z0 = lo[2];
+        self.dz = ((hi[2] - lo[2]) / (MAPS - 1) as f32).max(1e-5);
+        self.inv_dz = 1.0 / self.dz;
+    }
+
+    /// The jobs that deposit the strands (`offsets` into the points of
+    /// [`ShadowMaps::light_frame`]); each first scales its own points' u and v to texels.
+    pub(crate) fn deposits<'a>(&'a mut self, offsets: &'a [u32]) -> Deposit<'a> {
+        let splat = Splat {
+            size: self.size,
+            u0: self.u0,
+            v0: self.v0,
+            inv_texel: self.inv_texel,
+            z0: self.z0,
+            inv_dz: self.inv_dz,
+        };
+        let ns = offsets.len().saturating_sub(1);
+        let lp = split_parts(&mut self.lp, |h| {
+            if ns == 0 {
+                0
+            } else {
+                offsets[(h + 1) * ns / HALVES] as usize
+            }
+        });
+        Deposit {
+            splat,
+            offsets,
+            lp,
+            partial: &self.partial,
+        }
+    }
+
+    /// The jobs that sum the deposits front to back into the maps.
+    pub(crate) fn sums(&mut self) -> Sum<'_> {
+        let [p0, p1] = &mut self.partial;
+        let (p0, p1) = (
+            &*p0.get_mut().unwrap_or_else(|e| e.into_inner()),
+            &*p1.get_mut().unwrap_or_else(|e| e.into_inner()),
+        );
+        let row = self.size * MAPS;
+        let rows = self.size;
+        Sum {
+            size: self.size,
+            bands: split_parts(&mut self.omega, |c| (c + 1) * rows / SUM_BANDS * row),
+            p0,
+            p1,
         }
     }
 
