@@ -142,7 +142,34 @@ pub(crate) struct TileRays {
 }
 
 impl TileRays {
-    /// The view depth of the nearest hit of ray (i, j) beyond the near plane, if any.
+    /// [`TileRays::hit`], with infinity for no hit, computed without a branch: the same
+    /// operations, so the same depth where there is a hit.
+    #[inline(always)]
+    pub fn hit_or_infinity(&self, i: f32, j: f32) -> f32 {
+        let d = [
+            self.d00[0] + i * self.dx[0] + j * self.dy[0],
+            self.d00[1] + i * self.dx[1] + j * self.dy[1],
+            self.d00[2] + i * self.dx[2] + j * self.dy[2],
+        ];
+        let b = dot(self.o, d);
+        let a = dot(d, d);
+        let disc = b * b - a * self.c;
+        // No hit where disc < 0 (or NaN): the root of 0 there is never used.
+        let sq = (if disc >= 0.0 { disc } else { 0.0 }).sqrt();
+        let t0 = (-b - sq) / a;
+        let t1 = (-b + sq) / a;
+        let t = if t1 > NEAR { t1 } else { f32::INFINITY };
+        let t = if t0 > NEAR { t0 } else { t };
+        if disc >= 0.0 {
+            t
+        } else {
+            f32::INFINITY
+        }
+    }
+
+    /// The view depth of the nearest hit of ray (i, j) beyond the near plane, if any (the
+    /// textbook form of [`TileRays::hit_or_infinity`], which the tests check it against).
+    #[cfg(test)]
     #[inline]
     pub fn hit(&self, i: f32, j: f32) -> Option<f32> {
         let d = [
@@ -163,5 +190,55 @@ impl TileRays {
         }
         let t1 = (-b + sq) / a;
         (t1 > NEAR).then_some(t1)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::render::camera::{Camera, DEFAULT_VIEW};
+
+    #[test]
+    fn the_branch_free_hit_gives_the_textbook_hit_bit_for_bit() {
+        // A scalp-like ellipsoid and a sphere seen from a camera framing them, and a camera
+        // inside the sphere (every ray starts inside: the far root only).
+        let (lo, hi) = ([-0.2, 1.3, -0.2], [0.2, 1.8, 0.2]);
+        let outside = Camera::framing(lo, hi, DEFAULT_VIEW);
+        let mut inside = outside;
+        inside.eye = [0.0, 1.6, 0.0];
+        let body = BodyBuf {
+            sphere_centers: vec![[0.0, 1.6, 0.0]],
+            sphere_radii: vec![0.1],
+            scalp_center: [0.0, 1.62, 0.01],
+            scalp_radii: [0.08, 0.1, 0.09],
+            scalp_rotation: [0.1, 0.2, 0.0, 0.97],
+        };
+        let (mut hits, mut misses) = (0, 0);
+        for cam in [&outside, &inside] {
+            let view = View::new(cam, 640, 480);
+            let mut ps = Vec::new();
+            prims(&body, &view, 640.0, 480.0, &mut ps);
+            assert_eq!(ps.len(), 2);
+            let d00 = view.ray(0.5, 0.5);
+            let dx = sub(view.ray(1.5, 0.5), d00);
+            let dy = sub(view.ray(0.5, 1.5), d00);
+            for p in &ps {
+                let r = p.rays(view.eye, d00, dx, dy);
+                for j in (0..480).step_by(3) {
+                    for i in (0..640).step_by(3) {
+                        let (i, j) = (i as f32, j as f32);
+                        let want = r.hit(i, j).unwrap_or(f32::INFINITY);
+                        assert_eq!(r.hit_or_infinity(i, j).to_bits(), want.to_bits());
+                        if want.is_finite() {
+                            hits += 1;
+                        } else {
+                            misses += 1;
+                        }
+                    }
+                }
+            }
+        }
+        // Both outcomes are exercised, from outside and from inside.
+        assert!(hits > 1000 && misses > 1000, "{hits} hits, {misses} misses");
     }
 }

@@ -398,8 +398,14 @@ impl Renderer {
                     for (j, layer) in run.iter_mut().enumerate() {
                         let origin = grid.origin(t0 + j);
                         let layer = layer.get_mut().unwrap_or_else(|e| e.into_inner());
-                        w.buf
-                            .cast_layer(grid.tile_samples(), origin, view, prims, layer);
+                        tile::cast_layer(
+                            &mut w.buf,
+                            grid.tile_samples(),
+                            origin,
+                            view,
+                            prims,
+                            layer,
+                        );
                     }
                 });
             }
