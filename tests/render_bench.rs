@@ -27,6 +27,8 @@ fn bench_render_writes_one_row_per_scene() {
         assert_eq!(r["height"], 480);
         assert!(r["fps_1_thread"].as_f64().unwrap() > 0.0, "{r}");
         assert!(r["fps_2_threads"].as_f64().unwrap() > 0.0, "{r}");
+        assert!(r["fps_1_thread_mean"].as_f64().unwrap() > 0.0, "{r}");
+        assert!(r["fps_2_threads_mean"].as_f64().unwrap() > 0.0, "{r}");
     }
     let zhang = &rows[2];
     assert_eq!(zhang["strands"], 16215);

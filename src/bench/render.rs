@@ -20,8 +20,12 @@ pub struct RenderRow {
     pub segments: usize,
     pub width: u32,
     pub height: u32,
+    /// Frames per second at the median frame time (see [`crate::render::RenderBench::fps`]).
     pub fps_1_thread: f64,
     pub fps_2_threads: f64,
+    /// Frames per second over all the timed frames (a shared machine's bursts included).
+    pub fps_1_thread_mean: f64,
+    pub fps_2_threads_mean: f64,
     /// Milliseconds per frame on 1 thread: shadow maps, shading (projecting every strand
     /// point, and shading those that binned segments use), rasterising, resolve.
     pub stage_ms_1_thread: [f64; 4],
@@ -68,6 +72,8 @@ fn row(
         height: h,
         fps_1_thread: one.fps,
         fps_2_threads: two.fps,
+        fps_1_thread_mean: one.fps_mean,
+        fps_2_threads_mean: two.fps_mean,
         stage_ms_1_thread: one.stage_ms,
     })
 }
@@ -75,15 +81,17 @@ fn row(
 /// Prints the rows.
 pub fn print_render(rows: &[RenderRow]) {
     println!();
-    println!("renderer at 640x480 (fps; stages in ms per frame on 1 thread: shadow maps, projection and shading, rasterising, resolve):");
+    println!("renderer at 640x480 (fps at the median frame time, over all frames in brackets; stages in ms per frame on 1 thread: shadow maps, projection and shading, rasterising, resolve):");
     for r in rows {
         println!(
-            "{:<12} {:>6} strands {:>7} segments  {:>6.1} fps 1 thread  {:>6.1} fps 2 threads  [{:.1}, {:.1}, {:.1}, {:.1}]",
+            "{:<12} {:>6} strands {:>7} segments  {:>6.1} ({:.1}) fps 1 thread  {:>6.1} ({:.1}) fps 2 threads  [{:.1}, {:.1}, {:.1}, {:.1}]",
             r.scene,
             r.strands,
             r.segments,
             r.fps_1_thread,
+            r.fps_1_thread_mean,
             r.fps_2_threads,
+            r.fps_2_threads_mean,
             r.stage_ms_1_thread[0],
             r.stage_ms_1_thread[1],
             r.stage_ms_1_thread[2],
