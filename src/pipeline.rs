@@ -104,6 +104,17 @@ pub fn catmull_rom(p: &[nalgebra::Vector3<f64>], sub: usize, out: &mut Vec<[f32;
         out.extend(p.iter().map(|v| to32(*v)));
         return;
     }
+    // The powers of t for each point of a span, the same for every span (computed as below,
+    // so the same values): no division per point.
+    const MAX_SUB: usize = 16;
+    let mut powers = [(0.0f64, 0.0f64, 0.0f64); MAX_SUB];
+    let tabled = sub <= MAX_SUB;
+    if tabled {
+        for (j, w) in powers[..sub].iter_mut().enumerate() {
+            let t = j as f64 / sub as f64;
+            *w = (t, t * t, t * t * t);
+        }
+    }
     for i in 0..n - 1 {
         let p0 = if i == 0 { p[0] * 2.0 - p[1] } else { p[i - 1] };
         let (p1, p2) = (p[i], p[i + 1]);
@@ -118,8 +129,13 @@ pub fn catmull_rom(p: &[nalgebra::Vector3<f64>], sub: usize, out: &mut Vec<[f32;
         let c2 = p0 * 2.0 - p1 * 5.0 + p2 * 4.0 - p3;
         let c3 = p1 * 3.0 - p0 - p2 * 3.0 + p3;
         for j in 0..sub {
-            let t = j as f64 / sub as f64;
-            let (t2, t3) = (t * t, t * t * t);
+            let (t, t2, t3) = match powers.get(j) {
+                Some(&w) if tabled => w,
+                _ => {
+                    let t = j as f64 / sub as f64;
+                    (t, t * t, t * t * t)
+                }
+            };
             let v = (c0 + c1 * t + c2 * t2 + c3 * t3) * 0.5;
             out.push(to32(v));
         }
@@ -256,27 +272,30 @@ mod tests {
                 Vector3::new(0.31 * x, (1.7 * x).sin() * 0.2, (0.9 * x).cos() * 0.05)
             })
             .collect();
-        let sub = 5;
-        let mut out = Vec::new();
-        catmull_rom(&p, sub, &mut out);
-        let n = p.len();
-        for i in 0..n - 1 {
-            let p0 = if i == 0 { p[0] * 2.0 - p[1] } else { p[i - 1] };
-            let (p1, p2) = (p[i], p[i + 1]);
-            let p3 = if i + 2 < n {
-                p[i + 2]
-            } else {
-                p[n - 1] * 2.0 - p[n - 2]
-            };
-            for j in 0..sub {
-                let t = j as f64 / sub as f64;
-                let (t2, t3) = (t * t, t * t * t);
-                let v = (p1 * 2.0
-                    + (p2 - p0) * t
-                    + (p0 * 2.0 - p1 * 5.0 + p2 * 4.0 - p3) * t2
-                    + (p1 * 3.0 - p0 - p2 * 3.0 + p3) * t3)
-                    * 0.5;
-                assert_eq!(out[i * sub + j], [v.x as f32, v.y as f32, v.z as f32]);
+        // A span's powers of t come from a table up to 16 points per span, beyond from the
+        // division itself: both paths.
+        for sub in [5, 23] {
+            let mut out = Vec::new();
+            catmull_rom(&p, sub, &mut out);
+            let n = p.len();
+            for i in 0..n - 1 {
+                let p0 = if i == 0 { p[0] * 2.0 - p[1] } else { p[i - 1] };
+                let (p1, p2) = (p[i], p[i + 1]);
+                let p3 = if i + 2 < n {
+                    p[i + 2]
+                } else {
+                    p[n - 1] * 2.0 - p[n - 2]
+                };
+                for j in 0..sub {
+                    let t = j as f64 / sub as f64;
+                    let (t2, t3) = (t * t, t * t * t);
+                    let v = (p1 * 2.0
+                        + (p2 - p0) * t
+                        + (p0 * 2.0 - p1 * 5.0 + p2 * 4.0 - p3) * t2
+                        + (p1 * 3.0 - p0 - p2 * 3.0 + p3) * t3)
+                        * 0.5;
+                    assert_eq!(out[i * sub + j], [v.x as f32, v.y as f32, v.z as f32]);
+                }
             }
         }
     }
