@@ -270,6 +270,7 @@ impl Splat {
         let w = len * step;
         let inv_dz = self.inv_dz;
         let s = self.size;
+        assert!(s >= 2 && m.len() >= s * s * MAPS, "a map of {s}² texels");
         let max = (s - 2) as f32;
         let top = (MAPS - 1) as f32;
         let mut t = 0.5 * step;
@@ -289,10 +290,15 @@ impl Splat {
             // fall in one map, so successive splats touch nearby memory (texel-major, each
             // splat touched four cache lines of a 1 MB array).
             let base = map * s * s + yi * s + xi;
-            m[base] += w * (1.0 - fx) * (1.0 - fy);
-            m[base + 1] += w * fx * (1.0 - fy);
-            m[base + s] += w * (1.0 - fx) * fy;
-            m[base + s + 1] += w * fx * fy;
+            // SAFETY: xi, yi ≤ s − 2 and map ≤ MAPS − 1, so base + s + 1 ≤ MAPS·s² − 1, and
+            // `m` holds MAPS·s² values (asserted above). (Four bounds checks a piece were a
+            // tenth of the deposit's instructions.)
+            unsafe {
+                *m.get_unchecked_mut(base) += w * (1.0 - fx) * (1.0 - fy);
+                *m.get_unchecked_mut(base + 1) += w * fx * (1.0 - fy);
+                *m.get_unchecked_mut(base + s) += w * (1.0 - fx) * fy;
+                *m.get_unchecked_mut(base + s + 1) += w * fx * fy;
+            }
         }
     }
 }
