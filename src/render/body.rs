@@ -142,8 +142,9 @@ pub(crate) struct TileRays {
 }
 
 impl TileRays {
-    /// [`TileRays::hit`], with infinity for no hit, computed without a branch: the same
-    /// operations, so the same depth where there is a hit.
+    /// The nearest hit as `TileRays::hit` (the textbook form, kept for the tests) gives it,
+    /// or infinity for none, computed without a branch: the same operations, so the same
+    /// depth where there is a hit.
     #[inline(always)]
     pub fn hit_or_infinity(&self, i: f32, j: f32) -> f32 {
         let d = [

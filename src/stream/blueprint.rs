@@ -113,7 +113,7 @@ const PANEL_STATES: (PanelState, PanelState, PanelState) = (
 );
 
 /// The default layout through the SDK's high-level blueprint API. It cannot place the 3D camera
-/// (the Rust `Spatial3DView` of 0.36 has no eye-controls setter); [`Logger::new`] sends
+/// (the Rust `Spatial3DView` of 0.36 has no eye-controls setter); [`super::Logger::new`] sends
 /// [`send_blueprint`]'s equivalent layout that does.
 pub fn blueprint() -> rerun::blueprint::Blueprint {
     use rerun::blueprint::{

@@ -67,7 +67,8 @@ fn runs_path(prefix: &str, kind: u8, k: u32) -> String {
 ///
 /// `blueprint_id` fixes the blueprint's store id (every part of one sweep sends the same
 /// layout, so a merge of the parts holds one blueprint); `None`: a fresh one, as the SDK does.
-/// Built from blueprint archetypes, as [`send_blueprint_with`], to set each view's eye.
+/// Built from blueprint archetypes, as [`super::blueprint::send_blueprint_with`], to set each
+/// view's eye.
 pub fn runs_blueprint(
     app_id: &str,
     runs: &[RunView],

@@ -125,7 +125,7 @@ impl WebViewer {
 pub struct Recording(pub RecordingStream);
 
 impl Recording {
-    /// A recording kept in memory (tests decode it with [`Recording::memory_bytes`]).
+    /// A recording kept in memory (tests decode the bytes of its [`MemoryRecording`]).
     pub fn memory() -> anyhow::Result<(Recording, MemoryRecording)> {
         let (rec, storage) = rerun::RecordingStreamBuilder::new(APP_ID)
             .memory()

@@ -36,7 +36,7 @@ pub struct Style {
     #[serde(default)]
     pub sim: SimParams,
     /// Parameters of the layered wisp model (`--model layered`). Default:
-    /// [`LayeredParams::default`].
+    /// [`LayeredParams::default`](crate::solver::layered::LayeredParams::default).
     #[serde(default)]
     pub layered: crate::solver::layered::LayeredParams,
     /// How the hair is rendered (shading, shadows, antialiasing). Default:

@@ -1,11 +1,11 @@
 //! Generated hair after Zhang & Wünsche 2007 §3: wisps grown on scalp regions from key strands.
 //!
-//! Every [`Wisp`] is cut into `tiles.0 × tiles.1` tiles of its `(azimuth, elevation)` region;
-//! each tile becomes one top-level wisp of the [`RawHair`]. A tile's strands are its key strand
-//! (a Catmull-Rom spline given in the styling frame at the tile's centre) translated to each
-//! member root, plus an offset that grows linearly from zero at the root to at most
-//! `tip_spread` at the tip, applied in a rotation-minimising frame of the key strand (the
-//! paper's "torsion minimising reference frame"), plus an optional helix (curl).
+//! Every [`Wisp`](crate::style::schema::Wisp) is cut into `tiles.0 × tiles.1` tiles of its
+//! `(azimuth, elevation)` region; each tile becomes one top-level wisp of the [`RawHair`]. A tile's
+//! strands are its key strand (a Catmull-Rom spline given in the styling frame at the tile's
+//! centre) translated to each member root, plus an offset that grows linearly from zero at the root
+//! to at most `tip_spread` at the tip, applied in a rotation-minimising frame of the key strand
+//! (the paper's "torsion minimising reference frame"), plus an optional helix (curl).
 //!
 //! Everything random comes from a SplitMix64 stream seeded from `style.seed` and the wisp/tile
 //! index, so the same style gives bit-identical strands and each tile's strands do not depend
