@@ -142,11 +142,10 @@ pub(crate) struct TileRays {
 }
 
 impl TileRays {
-    /// The nearest hit as `TileRays::hit` (the textbook form, kept for the tests) gives it,
-    /// or infinity for none, computed without a branch: the same operations, so the same
-    /// depth where there is a hit.
+    /// Ray (i, j) against the unit sphere: a·t² + 2b·t + c = 0 with a = |d|², b = o·d, and
+    /// its discriminant b² − a·c (a hit where it is ≥ 0, at t = (−b ± √disc) / a).
     #[inline(always)]
-    pub fn hit_or_infinity(&self, i: f32, j: f32) -> f32 {
+    fn quadratic(&self, i: f32, j: f32) -> (f32, f32, f32) {
         let d = [
             self.d00[0] + i * self.dx[0] + j * self.dy[0],
             self.d00[1] + i * self.dx[1] + j * self.dy[1],
@@ -154,7 +153,15 @@ impl TileRays {
         ];
         let b = dot(self.o, d);
         let a = dot(d, d);
-        let disc = b * b - a * self.c;
+        (a, b, b * b - a * self.c)
+    }
+
+    /// The nearest hit as `TileRays::hit` (the textbook form, kept for the tests) gives it,
+    /// or infinity for none, computed without a branch: the same operations, so the same
+    /// depth where there is a hit.
+    #[inline(always)]
+    pub fn hit_or_infinity(&self, i: f32, j: f32) -> f32 {
+        let (a, b, disc) = self.quadratic(i, j);
         // No hit where disc < 0 (or NaN): the root of 0 there is never used.
         let sq = (if disc >= 0.0 { disc } else { 0.0 }).sqrt();
         let t0 = (-b - sq) / a;
@@ -171,16 +178,8 @@ impl TileRays {
     /// The view depth of the nearest hit of ray (i, j) beyond the near plane, if any (the
     /// textbook form of [`TileRays::hit_or_infinity`], which the tests check it against).
     #[cfg(test)]
-    #[inline]
     pub fn hit(&self, i: f32, j: f32) -> Option<f32> {
-        let d = [
-            self.d00[0] + i * self.dx[0] + j * self.dy[0],
-            self.d00[1] + i * self.dx[1] + j * self.dy[1],
-            self.d00[2] + i * self.dx[2] + j * self.dy[2],
-        ];
-        let b = dot(self.o, d);
-        let a = dot(d, d);
-        let disc = b * b - a * self.c;
+        let (a, b, disc) = self.quadratic(i, j);
         if disc < 0.0 {
             return None;
         }

@@ -36,9 +36,9 @@ pub(crate) struct SegRec {
 
 /// The frame's visible segments binned into tiles; each tile sorts its own segments by a 16-bit
 /// depth key ([`bucket_tile`], [`super::tile::draw_buckets`]) so that no pass walks the whole
-/// frame in depth order (which would miss the cache at every segment). The strands are binned in two halves
-/// (one per thread at most), each into its own lists: a tile's segments are half 0's list then
-/// half 1's, in strand order whatever the number of threads.
+/// frame in depth order (which would miss the cache at every segment). The strands are binned
+/// in two halves (one per thread at most), each into its own lists: a tile's segments are half
+/// 0's list then half 1's, in strand order whatever the number of threads.
 #[derive(Debug, Default)]
 pub(crate) struct Bins {
     pub halves: [std::sync::Mutex<HalfBins>; 2],

@@ -224,8 +224,8 @@ impl TileBuf {
                 let prim = &mut self.prim[j * n + i0..j * n + i1];
                 // Every sample of the row computed and kept where nearer, without a branch
                 // (vector code); the same operations as a per-sample `hit`, so the same depths.
-                for (k, (z, pr)) in zb.iter_mut().zip(prim.iter_mut()).enumerate() {
-                    let t = r.hit_or_infinity((i0 + k) as f32, j as f32);
+                for (di, (z, pr)) in zb.iter_mut().zip(prim.iter_mut()).enumerate() {
+                    let t = r.hit_or_infinity((i0 + di) as f32, j as f32);
                     let nearer = t < *z;
                     *z = if nearer { t } else { *z };
                     *pr = if nearer { k_prim } else { *pr };
