@@ -45,9 +45,9 @@ pub struct BenchArgs {
     #[arg(long, value_name = "FILE")]
     pub rrd: Option<PathBuf>,
     /// Time the renderer (only) at 640x480 on Long, Long curly and a 16,215-strand head, on 1
-    /// and 2 threads, 30 frames each (JSON key "render"). Frames per second are given at the
-    /// median frame time, and over all frames in brackets (a shared machine's bursts of other
-    /// work slow a few frames a lot: the median is the renderer's own speed).
+    /// and 2 threads, 30 frames each, 3 with --quick (JSON key "render"). Frames per second are
+    /// given at the median frame time, and over all frames in brackets (a shared machine's
+    /// bursts of other work slow a few frames a lot: the median is the renderer's own speed).
     #[arg(long)]
     pub render: bool,
 }
