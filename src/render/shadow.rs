@@ -103,13 +103,42 @@ super::pool::multiversion! {
             q[0] = (q[0] - splat.u0) * splat.inv_texel;
             q[1] = (q[1] - splat.v0) * splat.inv_texel;
         }
+        // The segments are cut into pieces, eight at a time in vector lanes, into a short run
+        // that is splatted whenever it fills: cutting a segment into one or two pieces takes
+        // no branch on which (the processor guessed wrong at about every other segment), and
+        // the splats come in the order of the segments, so the sums are those of depositing
+        // the segments one by one.
+        let mut run = [Piece::default(); PIECE_RUN];
+        let mut n = 0;
         for s in range {
             let (a, b) = (offsets[s] as usize - base, offsets[s + 1] as usize - base);
-            for i in a..b.saturating_sub(1) {
-                splat.deposit(m, lp[i], lp[i + 1]);
+            let pts = &lp[a..b];
+            for k0 in (0..pts.len().saturating_sub(1)).step_by(CUT_LANES) {
+                if n + 2 * CUT_LANES > PIECE_RUN {
+                    splat.apply(m, &run[..n]);
+                    n = 0;
+                }
+                n = splat.cut_lanes(m, pts, k0, &mut run, n);
             }
         }
+        splat.apply(m, &run[..n]);
     }
+}
+
+/// Segments cut together, one per vector lane ([`Splat::cut_lanes`]).
+const CUT_LANES: usize = 8;
+
+/// Pieces cut before they are splatted ([`Splat::cut`], [`Splat::apply`]): 4 kB on the stack.
+const PIECE_RUN: usize = 256;
+
+/// A piece of a segment, ready to splat: the map-major index of the first texel of its 2×2
+/// footprint (less than MAPS·size² − size − 1), its position in the footprint, its length.
+#[derive(Debug, Clone, Copy, Default)]
+struct Piece {
+    base: u32,
+    fx: f32,
+    fy: f32,
+    w: f32,
 }
 
 /// What a deposit needs of the frame's light frame (a copy, so that the deposits can write
@@ -239,60 +268,128 @@ impl Sum<'_> {
 }
 
 impl Splat {
-    /// Deposits segment a–b (light space) into `m`, each piece (at most two texels long) into
-    /// the first map behind it.
+    /// Cuts segment a–b (light space, u and v in texels) into pieces at most two texels long
+    /// (the bilinear splat spreads each over a 2×2 footprint, so the deposit stays continuous
+    /// at half the cost of one piece per texel), each to be deposited into the first map
+    /// behind it, and appends them to `run[..n]`, splatting the run into `m` whenever it is
+    /// full; returns the new length of the run. The reference of [`Splat::cut_lanes`], which
+    /// leaves it the rare segments more than four texels long.
     #[inline(always)]
-    fn deposit(&self, m: &mut [f32], a: [f32; 3], b: [f32; 3]) {
-        use super::raster::{mn, mx};
+    fn cut(
+        &self,
+        m: &mut [f32],
+        a: [f32; 3],
+        b: [f32; 3],
+        run: &mut [Piece; PIECE_RUN],
+        n: usize,
+    ) -> usize {
         let (du, dv) = (b[0] - a[0], b[1] - a[1]);
         let len = (du * du + dv * dv).sqrt();
-        // Pieces up to two texels long: the bilinear splat spreads each over a 2×2 footprint,
-        // so the deposit stays continuous at half the cost of one piece per texel.
         let pieces = super::raster::ceil_pos(0.5 * len).max(1);
-        // 1 / pieces, from a table for the usual few (the same correctly rounded quotients,
-        // without a division's latency at every segment).
-        const INV: [f32; 9] = [
-            1.0,
-            1.0,
-            1.0 / 2.0,
-            1.0 / 3.0,
-            1.0 / 4.0,
-            1.0 / 5.0,
-            1.0 / 6.0,
-            1.0 / 7.0,
-            1.0 / 8.0,
-        ];
-        let step = if pieces < INV.len() {
-            INV[pieces]
-        } else {
-            1.0 / pieces as f32
-        };
+        let step = 1.0 / pieces as f32;
         let w = len * step;
-        let inv_dz = self.inv_dz;
+        let (mut n, mut t) = (n, 0.5 * step);
+        for _ in 0..pieces {
+            if n == PIECE_RUN {
+                self.apply(m, &run[..n]);
+                n = 0;
+            }
+            run[n] = self.piece(a, b, t, w);
+            n += 1;
+            t += step;
+        }
+        n
+    }
+
+    /// [`Splat::cut`] of segments `k0..k0 + CUT_LANES` of a strand whose points are `pts`
+    /// (those that exist), computed lane by lane with the same arithmetic (so that it compiles
+    /// to vector code, with the same bits), then put in `run` one after the other. There must
+    /// be room for two pieces per lane.
+    #[inline(always)]
+    fn cut_lanes(
+        &self,
+        m: &mut [f32],
+        pts: &[[f32; 3]],
+        k0: usize,
+        run: &mut [Piece; PIECE_RUN],
+        n: usize,
+    ) -> usize {
+        const L: usize = CUT_LANES;
+        let segs = pts.len() - 1;
+        // Lanes past the strand's last segment repeat it, and are dropped.
+        let count = (segs - k0).min(L);
+        let a: [[f32; 3]; L] = std::array::from_fn(|l| pts[(k0 + l).min(segs - 1)]);
+        let b: [[f32; 3]; L] = std::array::from_fn(|l| pts[(k0 + l).min(segs - 1) + 1]);
+        let len: [f32; L] = std::array::from_fn(|l| {
+            let (du, dv) = (b[l][0] - a[l][0], b[l][1] - a[l][1]);
+            (du * du + dv * dv).sqrt()
+        });
+        let pieces: [usize; L] =
+            std::array::from_fn(|l| super::raster::ceil_pos(0.5 * len[l]).max(1));
+        // The correctly rounded quotient, as `cut`'s table holds.
+        let step: [f32; L] = std::array::from_fn(|l| 1.0 / pieces[l] as f32);
+        let w: [f32; L] = std::array::from_fn(|l| len[l] * step[l]);
+        let t0: [f32; L] = std::array::from_fn(|l| 0.5 * step[l]);
+        let first: [Piece; L] = std::array::from_fn(|l| self.piece(a[l], b[l], t0[l], w[l]));
+        // A second piece past b (of a one-piece segment) is clamped into the maps like any
+        // other, and dropped.
+        let second: [Piece; L] =
+            std::array::from_fn(|l| self.piece(a[l], b[l], t0[l] + step[l], w[l]));
+        let mut n = n;
+        if pieces[..count].iter().all(|&p| p <= 2) {
+            // Nearly always (segments up to four texels long): both pieces written, one or
+            // two counted, with no branch on which.
+            for l in 0..count {
+                run[n] = first[l];
+                run[n + 1] = second[l];
+                n += pieces[l];
+            }
+            return n;
+        }
+        for l in 0..count {
+            n = self.cut(m, a[l], b[l], run, n);
+        }
+        n
+    }
+
+    /// The piece of length `w` texels at parameter `t` of segment a–b.
+    #[inline(always)]
+    fn piece(&self, a: [f32; 3], b: [f32; 3], t: f32, w: f32) -> Piece {
+        use super::raster::{mn, mx};
         let s = self.size;
-        assert!(s >= 2 && m.len() >= s * s * MAPS, "a map of {s}² texels");
         let max = (s - 2) as f32;
         let top = (MAPS - 1) as f32;
-        let mut t = 0.5 * step;
-        for _ in 0..pieces {
-            // Texel centres are at integer + 0.5.
-            // (`mx`/`mn` send NaN to 0, so the conversions below are in range.)
-            let x = mn(mx(a[0] + du * t - 0.5, 0.0), max);
-            let y = mn(mx(a[1] + dv * t - 0.5, 0.0), max);
-            let z = a[2] + (b[2] - a[2]) * t;
-            t += step;
-            let map = super::raster::ceil_pos(mn((z - self.z0) * inv_dz, top));
-            // SAFETY: x and y are in [0, size − 2].
-            let (xi, yi) = unsafe { (x.to_int_unchecked::<i32>(), y.to_int_unchecked::<i32>()) };
-            let (fx, fy) = (x - xi as f32, y - yi as f32);
-            let (xi, yi) = (xi as usize, yi as usize);
-            // Deposits are map-major (one s² plane per map): the pieces of a strand mostly
-            // fall in one map, so successive splats touch nearby memory (texel-major, each
-            // splat touched four cache lines of a 1 MB array).
-            let base = map * s * s + yi * s + xi;
-            // SAFETY: xi, yi ≤ s − 2 and map ≤ MAPS − 1, so base + s + 1 ≤ MAPS·s² − 1, and
-            // `m` holds MAPS·s² values (asserted above). (Four bounds checks a piece were a
-            // tenth of the deposit's instructions.)
+        // Texel centres are at integer + 0.5.
+        // (`mx`/`mn` send NaN to 0, so the conversions below are in range.)
+        let x = mn(mx(a[0] + (b[0] - a[0]) * t - 0.5, 0.0), max);
+        let y = mn(mx(a[1] + (b[1] - a[1]) * t - 0.5, 0.0), max);
+        let z = a[2] + (b[2] - a[2]) * t;
+        let map = super::raster::ceil_pos(mn((z - self.z0) * self.inv_dz, top));
+        // SAFETY: x and y are in [0, size − 2].
+        let (xi, yi) = unsafe { (x.to_int_unchecked::<i32>(), y.to_int_unchecked::<i32>()) };
+        let (fx, fy) = (x - xi as f32, y - yi as f32);
+        // Deposits are map-major (one s² plane per map): the pieces of a strand mostly fall
+        // in one map, so successive splats touch nearby memory (texel-major, each splat
+        // touched four cache lines of a 1 MB array).
+        let base = map * s * s + yi as usize * s + xi as usize;
+        Piece {
+            base: base as u32,
+            fx,
+            fy,
+            w,
+        }
+    }
+
+    /// Splats `pieces` into `m`, in order, each bilinearly over its 2×2 footprint.
+    #[inline(always)]
+    fn apply(&self, m: &mut [f32], pieces: &[Piece]) {
+        let s = self.size;
+        assert!(s >= 2 && m.len() >= s * s * MAPS, "a map of {s}² texels");
+        for p in pieces {
+            let (base, fx, fy, w) = (p.base as usize, p.fx, p.fy, p.w);
+            // SAFETY: `piece` makes base ≤ (MAPS − 1)·s² + (s − 2)·s + s − 2, so
+            // base + s + 1 ≤ MAPS·s² − 1, and `m` holds MAPS·s² values (asserted above).
+            // (Four bounds checks a piece were a tenth of the deposit's instructions.)
             unsafe {
                 *m.get_unchecked_mut(base) += w * (1.0 - fx) * (1.0 - fy);
                 *m.get_unchecked_mut(base + 1) += w * fx * (1.0 - fy);
@@ -557,5 +654,75 @@ impl ShadowMaps {
     /// Depth of map 0 along the light direction, metres.
     pub fn first_depth(&self) -> f32 {
         self.z0
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A small deterministic generator: uniform in [0, 1).
+    fn lcg(state: &mut u64) -> f32 {
+        *state = state
+            .wrapping_mul(6_364_136_223_846_793_005)
+            .wrapping_add(1_442_695_040_888_963_407);
+        (*state >> 40) as f32 / (1u64 << 24) as f32
+    }
+
+    #[test]
+    fn the_lanes_cut_deposits_what_the_segments_cut_one_by_one_deposit_bit_for_bit() {
+        let splat = Splat {
+            size: 32,
+            u0: 0.0,
+            v0: 0.0,
+            inv_texel: 1.0,
+            z0: 0.0,
+            inv_dz: 1.0 / 0.01,
+        };
+        let mut rng = 5u64;
+        // Strands of 1 to 30 points with steps of up to 1, 4 or 12 texels (so that runs of
+        // one- and two-piece segments meet longer ones), some reaching out of the maps.
+        let mut offsets = vec![0u32];
+        let mut pts: Vec<[f32; 3]> = Vec::new();
+        let mut long_segments = 0;
+        for k in 0..300 {
+            let reach = [1.0, 4.0, 12.0][k % 3];
+            let mut p = [40.0 * lcg(&mut rng) - 4.0, 40.0 * lcg(&mut rng) - 4.0, 0.0];
+            let n = 1 + (lcg(&mut rng) * 30.0) as usize;
+            for i in 0..n {
+                if i > 0 {
+                    let d = [reach * (lcg(&mut rng) - 0.5), reach * (lcg(&mut rng) - 0.5)];
+                    long_segments += (d[0].hypot(d[1]) > 4.0) as usize;
+                    p = [p[0] + d[0], p[1] + d[1], 0.2 * lcg(&mut rng)];
+                }
+                pts.push(p);
+            }
+            offsets.push(pts.len() as u32);
+        }
+        assert!(long_segments > 50, "{long_segments}");
+        let plane = splat.size * splat.size * MAPS;
+        // The reference: every segment cut and splatted on its own.
+        let mut want = vec![0.0f32; plane];
+        let mut run = [Piece::default(); PIECE_RUN];
+        for s in 0..offsets.len() - 1 {
+            let (a, b) = (offsets[s] as usize, offsets[s + 1] as usize);
+            for i in a..b.saturating_sub(1) {
+                let n = splat.cut(&mut want, pts[i], pts[i + 1], &mut run, 0);
+                splat.apply(&mut want, &run[..n]);
+            }
+        }
+        // The renderer's deposit (its points already in texels: u0 = 0, one texel a unit).
+        let mut got = vec![0.0f32; plane];
+        let mut lp = pts.clone();
+        deposit_strands(
+            &splat,
+            &mut got,
+            (0, &mut lp),
+            &offsets,
+            0..offsets.len() - 1,
+        );
+        assert!(want.iter().filter(|&&v| v > 0.0).count() > 1000);
+        let bits = |m: &[f32]| m.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
+        assert_eq!(bits(&got), bits(&want));
     }
 }
