@@ -182,8 +182,14 @@ pub(crate) fn postfilter_rows(
             v[stride + 3 + ch] = v[stride + ch];
         }
         let dst = &mut out[(y - first) * stride..(y - first + 1) * stride];
-        for (i, (o, p)) in dst.iter_mut().zip(here).enumerate() {
-            let blur = v[i] + 2.0 * v[i + 3] + v[i + 6];
+        // The three taps as three shifted slices (indexing `v[i + 3]` kept a bounds check
+        // per value and the loop scalar).
+        let taps = v[..stride]
+            .iter()
+            .zip(&v[3..stride + 3])
+            .zip(&v[6..stride + 6]);
+        for ((o, p), ((l, c), r)) in dst.iter_mut().zip(here).zip(taps) {
+            let blur = l + 2.0 * c + r;
             let x = keep * p + k * blur;
             // Clamped to [0, 1] with NaN to 0 (comparisons, no `f32::clamp` NaN path), so the
             // index is in range and the unchecked conversion exact.

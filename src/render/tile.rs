@@ -171,11 +171,13 @@ impl TileBuf {
             // exit whose outcome the processor would have to guess.
             let want = (1u32 << (bx1 - bx0 + 1)) - 1;
             let mut m = want;
+            // One bounds check for the eight reads: the last row's four are in the array.
+            let last_at = by1 * self.stride + bx0;
+            let close = &self.block_close[..last_at + 4];
             for r in 0..NARROW_ROWS {
                 let at = (by0 + r).min(by1) * self.stride + bx0;
-                let four: &[f32; 4] = self.block_close[at..at + 4]
-                    .try_into()
-                    .expect("a slice of 4");
+                // SAFETY: at ≤ last_at, and `close` holds last_at + 4 values.
+                let four = unsafe { &*(close.as_ptr().add(at) as *const [f32; 4]) };
                 m &= four_hidden(four, z);
             }
             return m == want;
@@ -400,7 +402,12 @@ impl TileBuf {
         let t = lanes(|k| (0.5 * (lo[k] + hi[k]) - l.maj0) * l.inv);
         let c = lanes(|k| l.min0 + t[k] * (l.min1 - l.min0));
         let z = lanes(|k| l.z0 + t[k] * l.dz);
-        let rgb = [0, 1, 2].map(|ch| lanes(|k| l.c0[ch] + t[k] * l.dc[ch]));
+        // Channel by channel (`[0, 1, 2].map(..)` left a call to `array::map` here).
+        let rgb = [
+            lanes(|k| l.c0[0] + t[k] * l.dc[0]),
+            lanes(|k| l.c0[1] + t[k] * l.dc[1]),
+            lanes(|k| l.c0[2] + t[k] * l.dc[2]),
+        ];
         for k in 0..ge - gs {
             if cov_maj[k] <= 0.0 {
                 continue;
