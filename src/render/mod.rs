@@ -788,3 +788,15 @@ pub fn encode_jpeg_into(img: &Image, quality: u8, out: &mut Vec<u8>) {
         out.clear();
     }
 }
+
+/// A small deterministic generator for the renderer's tests.
+#[cfg(test)]
+mod test_rng {
+    /// The next value of the sequence in `state`: uniform in [0, 1).
+    pub fn lcg(state: &mut u64) -> f32 {
+        *state = state
+            .wrapping_mul(6_364_136_223_846_793_005)
+            .wrapping_add(1_442_695_040_888_963_407);
+        (*state >> 40) as f32 / (1u64 << 24) as f32
+    }
+}

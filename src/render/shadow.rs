@@ -326,7 +326,7 @@ impl Splat {
         });
         let pieces: [usize; L] =
             std::array::from_fn(|l| super::raster::ceil_pos(0.5 * len[l]).max(1));
-        // The correctly rounded quotient, as `cut`'s table holds.
+        // The correctly rounded quotient, as in `cut`.
         let step: [f32; L] = std::array::from_fn(|l| 1.0 / pieces[l] as f32);
         let w: [f32; L] = std::array::from_fn(|l| len[l] * step[l]);
         let t0: [f32; L] = std::array::from_fn(|l| 0.5 * step[l]);
@@ -660,14 +660,7 @@ impl ShadowMaps {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    /// A small deterministic generator: uniform in [0, 1).
-    fn lcg(state: &mut u64) -> f32 {
-        *state = state
-            .wrapping_mul(6_364_136_223_846_793_005)
-            .wrapping_add(1_442_695_040_888_963_407);
-        (*state >> 40) as f32 / (1u64 << 24) as f32
-    }
+    use crate::render::test_rng::lcg;
 
     #[test]
     fn the_lanes_cut_deposits_what_the_segments_cut_one_by_one_deposit_bit_for_bit() {

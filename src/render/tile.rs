@@ -966,6 +966,7 @@ mod tests {
     use super::super::raster::ScreenVertex;
     use super::*;
     use crate::frame::BodyBuf;
+    use crate::render::test_rng::lcg;
 
     /// One 32-pixel tile (64² samples, a 3° field of view) looking at a sphere of radius
     /// 0.1 m at the origin, which fills it, from 1 m away.
@@ -1163,14 +1164,6 @@ mod tests {
         assert!(reference.alive < 64 * 64 - 200, "{}", reference.alive);
         order.reverse();
         assert_ne!(bits(&draw_all(&order)), bits(&reference));
-    }
-
-    /// A small deterministic generator for the tests below: uniform in [0, 1).
-    fn lcg(state: &mut u64) -> f32 {
-        *state = state
-            .wrapping_mul(6_364_136_223_846_793_005)
-            .wrapping_add(1_442_695_040_888_963_407);
-        (*state >> 40) as f32 / (1u64 << 24) as f32
     }
 
     #[test]
