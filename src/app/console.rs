@@ -9,11 +9,16 @@ use super::tune::{self, KeyAction};
 pub struct Console {
     /// The progress bar, when one is shown.
     pub bar: Option<indicatif::ProgressBar>,
+    /// Say nothing (a run inside `bench --live`, whose rows are the output).
+    pub quiet: bool,
 }
 
 impl Console {
     /// Prints one message line (several, if it has newlines) to stderr.
     pub fn say(&self, msg: &str) {
+        if self.quiet {
+            return;
+        }
         if let Some(b) = &self.bar {
             b.println(msg);
         } else if tune::raw_mode_active() {

@@ -18,6 +18,7 @@ pub mod threads;
 pub mod tune;
 
 pub use run::{run, run_with, simulate_into, RunOptions, RunSummary, WebOptions};
+pub use sim_thread::{slow_motion_message, Load};
 pub use stop::{stop_on_ctrl_c, StopSignal};
 pub use threads::{LoopOptions, WebLink};
 

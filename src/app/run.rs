@@ -117,6 +117,10 @@ pub struct RunSummary {
     pub reloads: u32,
     /// Restarts done.
     pub restarts: u32,
+    /// How fast the simulation's frames came, frame by frame (the real-time factor).
+    pub tempo: crate::report::tempo::Tempo,
+    /// What the solver carried: active nodes, contacts.
+    pub load: super::sim_thread::Load,
 }
 
 /// `wisptree run`: installs the Ctrl-C handler and runs [`run_with`].
@@ -170,6 +174,8 @@ pub fn run_with(opts: RunOptions, stop: StopSignal) -> anyhow::Result<RunSummary
         progress: sink.file.is_some(),
         strands: opts.strands,
         render: opts.render,
+        render_skips_when_behind: sink.live,
+        quiet: false,
         web,
     };
     let file = sink.file.clone();

@@ -51,6 +51,11 @@ pub struct LoopOptions {
     pub strands: usize,
     /// Render every frame at this size (width, height) on a render thread; `None`: off.
     pub render: Option<(u32, u32)>,
+    /// The renderer skips a frame's image when frames wait behind it, as live runs do
+    /// (simulation frames are never skipped); `bench --live` does so unpaced.
+    pub render_skips_when_behind: bool,
+    /// Print nothing on the console (the run's log still goes to the recording).
+    pub quiet: bool,
     /// The control page's requests and the state it shows (`run --web`).
     pub web: Option<WebLink>,
 }
@@ -83,11 +88,12 @@ pub fn simulate(
     stop: &StopSignal,
 ) -> anyhow::Result<RunSummary> {
     let frames_total = opts.seconds.map(|s| scene.frames_for(s));
-    let console = if opts.progress {
+    let mut console = if opts.progress {
         Console::with_progress(frames_total)
     } else {
         Console::default()
     };
+    console.quiet = opts.quiet;
     let viewer = sink.watcher();
     let w = start_workers(scene, sink, opts, frames_total, stop, &console)?;
     let mut summary = RunSummary::default();
@@ -133,6 +139,8 @@ pub fn simulate(
     summary.splits = sim.splits;
     summary.merges = sim.merges;
     summary.restarts += sim.restarts;
+    summary.tempo = sim.tempo;
+    summary.load = sim.load;
     summary.interrupted = asked_to_stop && frames_total.is_none_or(|n| sim.frames < n);
     if let Some(msg) = never_connected {
         // Nothing was shown anywhere: an error, not a normal end.
@@ -170,7 +178,7 @@ fn start_workers(
                 camera: super::render_thread::scene_camera(scene),
                 input: sim_rx,
                 output: tx,
-                live: opts.live,
+                live: opts.render_skips_when_behind,
             };
             (rx, Some(thread))
         }

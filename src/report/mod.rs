@@ -3,6 +3,8 @@
 
 use std::time::Duration;
 
+pub mod tempo;
+
 /// Entity paths of the stats every solver reports (see README, "Entity paths"); a solver's own
 /// stats are named where it sets them.
 pub mod paths {
@@ -37,6 +39,9 @@ pub mod paths {
     pub const STEP_MS: &str = "/stats/step_ms";
     /// Frames dropped so far because the logger fell behind (live only).
     pub const DROPPED_FRAMES: &str = "/stats/dropped_frames";
+    /// Simulated seconds per wall second over the last second of frames: 1 is live, under 1
+    /// slow motion (in a recording: how fast the run went). See [`super::tempo`].
+    pub const REALTIME_FACTOR: &str = "/stats/realtime_factor";
     /// The split threshold in force, m²/s².
     pub const SPLIT_THRESHOLD: &str = "/params/split_threshold";
     /// The merge velocity threshold in force, m/s.

@@ -64,7 +64,7 @@ pub(super) const STRAND_RADIUS_UI: f32 = 1.0;
 pub(super) const EVENT_RADIUS_UI: f32 = 6.0;
 
 /// Series names and colours of the stats every solver has.
-pub const COMMON_SERIES: [(&str, (u8, u8, u8), &str); 13] = {
+pub const COMMON_SERIES: [(&str, (u8, u8, u8), &str); 14] = {
     use crate::report::paths as p;
     [
         (p::SPLITS, SPLIT_COLOR, "splits"),
@@ -80,6 +80,7 @@ pub const COMMON_SERIES: [(&str, (u8, u8, u8), &str); 13] = {
         (p::WIND_SPEED, (120, 200, 255), "wind (m/s)"),
         (p::STEP_MS, (200, 200, 210), "step (ms)"),
         (p::DROPPED_FRAMES, (255, 80, 80), "dropped frames"),
+        (p::REALTIME_FACTOR, (120, 255, 180), "real-time factor (×)"),
     ]
 };
 

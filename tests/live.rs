@@ -1,0 +1,230 @@
+//! Keeping up with the wall clock: every recording says how fast it went
+//! (`/stats/realtime_factor`), a live run that falls behind says why, and `bench --live`
+//! measures every solver × style × motion and the page's slider ends.
+
+#[path = "common/tiny_style.rs"]
+mod tiny_style;
+
+use std::collections::BTreeSet;
+use std::io::BufReader;
+use std::process::Command;
+
+use rerun::external::re_log_types::LogMsg;
+use rerun::log::Chunk;
+use rerun::{Scalars, TimelineName};
+use wisptree::app::{self as run, RunOptions, StopSignal};
+use wisptree::frame::Frame;
+use wisptree::report::paths::REALTIME_FACTOR;
+use wisptree::scene::Scene;
+use wisptree::solver::SolverKind;
+use wisptree::stream::sink::SinkChoice;
+
+/// `(frame, value)` of the scalar series at `path` in the recording at `file`.
+fn scalars(file: &std::path::Path, path: &str) -> Vec<(i64, f64)> {
+    let f = std::fs::File::open(file).expect("the recording exists");
+    let path: rerun::EntityPath = path.into();
+    let timeline = TimelineName::from("frame");
+    let component = Scalars::descriptor_scalars().component;
+    let mut out = Vec::new();
+    for msg in rerun::external::re_log_encoding::DecoderApp::decode_lazy(BufReader::new(f)) {
+        let LogMsg::ArrowMsg(store, arrow) = msg.expect("every message decodes") else {
+            continue;
+        };
+        if store.is_blueprint() {
+            continue;
+        }
+        let c = Chunk::from_arrow_msg(&arrow).expect("chunk decodes");
+        if *c.entity_path() != path {
+            continue;
+        }
+        for ((t, _), v) in c
+            .iter_component_indices(timeline, component)
+            .zip(c.iter_component::<rerun::components::Scalar>(component))
+        {
+            out.push((t.as_i64(), v.as_slice()[0].0 .0));
+        }
+    }
+    out.sort_by_key(|a| a.0);
+    out
+}
+
+#[test]
+fn a_recording_logs_the_realtime_factor_of_every_frame() {
+    let dir = tempfile::tempdir().unwrap();
+    let style = dir.path().join("tiny.ron");
+    std::fs::write(&style, tiny_style::tiny_style("0.2")).unwrap();
+    let out = dir.path().join("out.rrd");
+    let summary = run::run_with(
+        RunOptions {
+            style: style.display().to_string(),
+            motion: "shake".into(),
+            seconds: Some(1.0),
+            strands: 20,
+            watch: Some(false),
+            sink: SinkChoice::Save(out.clone()),
+            render: None,
+            ..RunOptions::default()
+        },
+        StopSignal::new(),
+    )
+    .expect("the run succeeds");
+    let series = scalars(&out, REALTIME_FACTOR);
+    assert_eq!(
+        series.iter().map(|s| s.0).collect::<Vec<_>>(),
+        (0..25).collect::<Vec<_>>(),
+        "one realtime factor per frame"
+    );
+    assert!(
+        series.iter().all(|s| s.1.is_finite() && s.1 > 0.0),
+        "{series:?}"
+    );
+    // The run's own account: 25 frames of 40 ms, their wall time measured.
+    let t = &summary.tempo;
+    assert_eq!(t.frames, 25);
+    assert!((t.sim_s - 1.0).abs() < 1e-9, "{}", t.sim_s);
+    assert!(t.wall_s > 0.0);
+    assert!((t.realtime_factor() - t.sim_s / t.wall_s).abs() < 1e-12);
+    // The last logged value is the factor over the last second: all 25 frames.
+    let last = series.last().unwrap().1;
+    assert!(
+        (last / t.realtime_factor() - 1.0).abs() < 1e-6,
+        "last {last} vs run {}",
+        t.realtime_factor()
+    );
+    assert!(t.frame_ms_quantile(0.95) > 0.0);
+}
+
+#[test]
+fn the_slow_motion_line_names_the_factor_the_model_the_strands_and_the_threshold() {
+    let dir = tempfile::tempdir().unwrap();
+    let style = dir.path().join("tiny.ron");
+    std::fs::write(&style, tiny_style::tiny_style("0.07")).unwrap();
+    let scene = Scene::load(&style.display().to_string(), "shake", SolverKind::Awt).unwrap();
+    let solver = scene.solver();
+    let mut f = Frame {
+        realtime_factor: 0.42,
+        step_ms: 12.5,
+        ..Frame::default()
+    };
+    f.counters.active_per_level = vec![4, 60];
+    let line = run::slow_motion_message(&*solver, &f, true);
+    for needle in [
+        "×0.42",
+        "slow motion",
+        "model awt",
+        &format!("{} strands", scene.model.strands.len()),
+        "64 active nodes",
+        "split threshold 0.07",
+        "--no-render",
+    ] {
+        assert!(line.contains(needle), "`{needle}` missing from: {line}");
+    }
+    let guides = scene.with_solver(SolverKind::Guides).solver();
+    let line = run::slow_motion_message(&*guides, &f, false);
+    assert!(
+        line.contains("model guides") && !line.contains("--no-render"),
+        "{line}"
+    );
+}
+
+#[test]
+fn bench_live_quick_has_every_solver_style_motion_the_slider_ends_and_rendering_rows() {
+    let dir = tempfile::tempdir().unwrap();
+    let json = dir.path().join("live.json");
+    let out = Command::new(env!("CARGO_BIN_EXE_wisptree"))
+        .args(["bench", "--live", "--quick", "--json"])
+        .arg(&json)
+        .output()
+        .expect("wisptree runs");
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "bench --live failed: {}\n{stdout}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    // The worst row is printed last.
+    assert!(
+        stdout
+            .trim_end()
+            .lines()
+            .last()
+            .unwrap_or("")
+            .starts_with("worst of all"),
+        "{stdout}"
+    );
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let rows = v["live"].as_array().expect("a `live` array");
+    let styles = ["short", "short_curly", "long", "long_curly"];
+    let motions = ["lean", "run", "jump", "shake", "stop"];
+    for r in rows {
+        for key in [
+            "solver",
+            "style",
+            "motion",
+            "split",
+            "merge",
+            "render",
+            "realtime_factor",
+            "p95_frame_ms",
+            "mean_active",
+            "max_active",
+            "contacts_per_step",
+        ] {
+            assert!(r.get(key).is_some(), "row without `{key}`: {r}");
+        }
+        // 1 simulated second per row with --quick, measured, and positive.
+        assert!(
+            (r["sim_seconds"].as_f64().unwrap() - 1.0).abs() < 0.021,
+            "{r}"
+        );
+        assert!(r["realtime_factor"].as_f64().unwrap() > 0.0, "{r}");
+        assert!(r["p95_frame_ms"].as_f64().unwrap() > 0.0, "{r}");
+        assert!(r["max_active"].as_u64().unwrap() > 0, "{r}");
+        let awt = r["solver"] == "awt";
+        assert_eq!(r["split"].is_number(), awt, "{r}");
+        assert_eq!(r["merge"].is_number(), awt, "{r}");
+    }
+    let key = |r: &serde_json::Value| {
+        (
+            r["solver"].as_str().unwrap().to_owned(),
+            r["style"].as_str().unwrap().to_owned(),
+            r["motion"].as_str().unwrap().to_owned(),
+            r["render"].as_bool().unwrap(),
+        )
+    };
+    let seen: BTreeSet<_> = rows.iter().map(key).collect();
+    for solver in ["awt", "layered", "guides"] {
+        for style in styles {
+            for motion in motions {
+                assert!(
+                    seen.contains(&(solver.into(), style.into(), motion.into(), false)),
+                    "no row for {solver} {style} {motion}"
+                );
+                if solver == "awt" {
+                    assert!(
+                        seen.contains(&(solver.into(), style.into(), motion.into(), true)),
+                        "no rendering row for {style} {motion}"
+                    );
+                }
+            }
+        }
+    }
+    // The slider ends under shake, on every style, with the value in force in the row.
+    for style in styles {
+        let shake: Vec<_> = rows
+            .iter()
+            .filter(|r| r["solver"] == "awt" && r["style"] == style && r["motion"] == "shake")
+            .collect();
+        let has = |k: &str, v: f64| shake.iter().any(|r| r[k].as_f64() == Some(v));
+        assert!(
+            has("split", 0.05) && has("split", 1.0),
+            "{style}: split ends"
+        );
+        assert!(
+            has("merge", 0.005) && has("merge", 1.0),
+            "{style}: merge ends"
+        );
+    }
+    assert_eq!(rows.len(), 3 * 4 * 5 + 4 * 4 + 4 * 5);
+}
