@@ -214,11 +214,8 @@ fn bad_tfx_files_exit_2() {
 }
 
 #[test]
-fn ponytail_style_loads_when_the_data_is_there() {
-    if shared().is_none() {
-        eprintln!("skipping: ../shared is absent");
-        return;
-    }
+fn ponytail_style_loads_from_the_shared_data() {
+    shared::shared_path("data/tressfx/ponytail");
     let p = root().join("styles/ponytail.ron");
     let (code, out, err) = wisptree(&["inspect", p.to_str().unwrap(), "--json"]);
     assert_eq!(code, 0, "{err}");
