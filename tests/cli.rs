@@ -279,3 +279,37 @@ fn bench_with_a_missing_model_exits_2() {
     assert_eq!(code, 2, "{err}");
     assert!(err.contains("no/such/style.ron"), "{err}");
 }
+
+// What a new user tripped on (issue 26, "Also").
+
+/// The `[default: …]` of `--flag` in `wisptree CMD --help`, if it has one.
+fn help_default(cmd: &str, flag: &str) -> Option<String> {
+    let (code, out, err) = wisptree(&[cmd, "--help"]);
+    assert_eq!(code, 0, "{err}");
+    // The flag's entry: its line and the lines of its description, up to the next flag.
+    let mut lines = out
+        .lines()
+        .skip_while(|l| !l.trim_start().starts_with(&format!("{flag} <")));
+    let first = lines.next()?;
+    let entry: Vec<&str> = std::iter::once(first)
+        .chain(lines.take_while(|l| !l.trim_start().starts_with('-')))
+        .collect();
+    let entry = entry.join(" ");
+    let (_, rest) = entry.split_once("[default: ")?;
+    Some(rest.split_once(']')?.0.to_owned())
+}
+
+#[test]
+fn export_has_the_defaults_of_render() {
+    for flag in ["--style", "--motion", "--seconds", "--model"] {
+        let render = help_default("render", flag);
+        assert!(render.is_some(), "render {flag} has a default");
+        assert_eq!(help_default("export", flag), render, "{flag}");
+    }
+    // Without --style and --seconds, export gets past the flags to its own checks.
+    let dir = tempfile::tempdir().unwrap();
+    let file = write(dir.path(), "not_a_folder", "");
+    let (code, _, err) = wisptree(&["export", "--out", &file]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("is not a folder"), "{err}");
+}
