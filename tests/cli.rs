@@ -282,6 +282,48 @@ fn bench_with_a_missing_model_exits_2() {
 
 // What a new user tripped on (issue 26, "Also").
 
+#[test]
+fn a_negative_number_gets_the_options_own_check_not_an_unexpected_argument() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    let out = out.to_str().unwrap();
+    for (args, needle) in [
+        (
+            vec!["--seconds", "-1"],
+            "expected a positive number of simulated seconds",
+        ),
+        (
+            vec!["run", "--seconds", "-1"],
+            "expected a positive number of simulated seconds",
+        ),
+        (
+            vec!["render", "--seconds", "-1", "--out", out],
+            "expected a positive number of simulated seconds",
+        ),
+        (
+            vec!["export", "--seconds", "-1", "--out", out],
+            "expected a positive number of simulated seconds",
+        ),
+        (
+            vec!["sweep", "--seconds", "-1"],
+            "expected a positive number of simulated seconds",
+        ),
+        (
+            vec!["bench", "--seconds", "-1"],
+            "--seconds must be a positive number",
+        ),
+        (vec!["--strands", "-5"], "at least one strand"),
+        (vec!["run", "--strands", "-5"], "at least one strand"),
+        (vec!["sweep", "--strands", "-5"], "at least one strand"),
+        (vec!["sweep", "--jobs", "-2"], "-2"),
+    ] {
+        let (code, _, err) = wisptree(&args);
+        assert_eq!(code, 2, "{args:?}: {err}");
+        assert!(!err.contains("unexpected argument"), "{args:?}: {err}");
+        assert!(err.contains(needle), "{args:?}: {err}");
+    }
+}
+
 /// The `[default: …]` of `--flag` in `wisptree CMD --help`, if it has one.
 fn help_default(cmd: &str, flag: &str) -> Option<String> {
     let (code, out, err) = wisptree(&[cmd, "--help"]);
