@@ -324,6 +324,26 @@ fn a_negative_number_gets_the_options_own_check_not_an_unexpected_argument() {
     }
 }
 
+#[test]
+fn a_motion_file_that_is_not_utf8_says_so_once() {
+    let dir = tempfile::tempdir().unwrap();
+    let motion = dir.path().join("bad.ron");
+    std::fs::write(&motion, b"(keys: [\xff\xfe])").unwrap();
+    let rrd = dir.path().join("x.rrd");
+    let (code, _, err) = wisptree(&[
+        "run",
+        "--motion",
+        motion.to_str().unwrap(),
+        "--seconds",
+        "0.1",
+        "--save",
+        rrd.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("bad.ron"), "{err}");
+    assert_eq!(err.matches("valid UTF-8").count(), 1, "{err}");
+}
+
 /// The `[default: …]` of `--flag` in `wisptree CMD --help`, if it has one.
 fn help_default(cmd: &str, flag: &str) -> Option<String> {
     let (code, out, err) = wisptree(&[cmd, "--help"]);
