@@ -344,6 +344,42 @@ fn a_motion_file_that_is_not_utf8_says_so_once() {
     assert_eq!(err.matches("valid UTF-8").count(), 1, "{err}");
 }
 
+#[test]
+fn a_huge_value_is_echoed_in_a_few_characters() {
+    let dir = tempfile::tempdir().unwrap();
+    // A motion file whose second key is at 1e308 s.
+    let motion = write(
+        dir.path(),
+        "m.ron",
+        "(keys: [(time: 0.0), (time: 1e308), (time: 1.0)])",
+    );
+    let rrd = dir.path().join("x.rrd");
+    let (code, _, err) = wisptree(&[
+        "run",
+        "--motion",
+        &motion,
+        "--seconds",
+        "0.1",
+        "--save",
+        rrd.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("1e308") && !err.contains("00000000"), "{err}");
+    // A style value.
+    let style = write(
+        dir.path(),
+        "s.ron",
+        &good_style().replace(
+            "sim: (total_mass: 0.5)",
+            "sim: (total_mass: 0.5, accel_smoothing: 1e308)",
+        ),
+    );
+    let (code, _, err) = wisptree(&["inspect", &style]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("accel_smoothing"), "{err}");
+    assert!(err.contains("1e308") && !err.contains("00000000"), "{err}");
+}
+
 /// The `[default: …]` of `--flag` in `wisptree CMD --help`, if it has one.
 fn help_default(cmd: &str, flag: &str) -> Option<String> {
     let (code, out, err) = wisptree(&[cmd, "--help"]);
