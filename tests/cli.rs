@@ -411,3 +411,16 @@ fn export_has_the_defaults_of_render() {
     assert_eq!(code, 2, "{err}");
     assert!(err.contains("is not a folder"), "{err}");
 }
+
+#[test]
+fn experiment_help_shows_the_name_as_required_and_list_still_lists() {
+    let (code, out, err) = wisptree(&["experiment", "--help"]);
+    assert_eq!(code, 0, "{err}");
+    assert!(out.contains("<NAME>") && !out.contains("[NAME]"), "{out}");
+    let (code, _, err) = wisptree(&["experiment"]);
+    assert_eq!(code, 2);
+    assert!(err.contains("<NAME>"), "{err}");
+    let (code, out, err) = wisptree(&["experiment", "--list"]);
+    assert_eq!(code, 0, "{err}");
+    assert!(out.contains("plante-fig8"), "{out}");
+}
