@@ -424,3 +424,10 @@ fn experiment_help_shows_the_name_as_required_and_list_still_lists() {
     assert_eq!(code, 0, "{err}");
     assert!(out.contains("plante-fig8"), "{out}");
 }
+
+#[test]
+fn sweep_help_gives_the_split_threshold_in_newton_metres_per_kilogram() {
+    let (code, out, err) = wisptree(&["sweep", "--help"]);
+    assert_eq!(code, 0, "{err}");
+    assert!(out.contains("N·m·kg⁻¹") && !out.contains("m²/s²"), "{out}");
+}

@@ -1,7 +1,7 @@
 //! The source tree against what the docs and the layers say about it: `src/lib.rs`'s module map
 //! and README's module table list exactly the modules of the tree, in the layer order below; no
 //! source file imports from a layer above its own; a folder whose `mod.rs` lists its files lists
-//! all of them.
+//! all of them; the split threshold has one unit.
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
@@ -346,4 +346,17 @@ fn a_folder_that_lists_its_files_lists_all_of_them() {
     }
     // solver/awt/collide/mod.rs lists its files.
     assert!(checked >= 1);
+}
+
+#[test]
+fn the_split_threshold_has_one_unit_everywhere() {
+    // N·m·kg⁻¹ (the page, README, the style schema); m²/s² was a second spelling of it.
+    for file in rust_files(&root().join("src")) {
+        let text = read(&file);
+        assert!(
+            !text.contains("m²/s²"),
+            "{}: write the split threshold's unit as N·m·kg⁻¹",
+            file.display()
+        );
+    }
 }

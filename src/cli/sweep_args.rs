@@ -25,7 +25,7 @@ pub struct SweepArgs {
     #[arg(long, value_name = "S", default_value_t = 10.0, value_parser = parse_seconds)]
     pub seconds: f64,
 
-    /// Split thresholds to sweep (`sim.split_threshold`, m²/s², ≥ 0), comma-separated:
+    /// Split thresholds to sweep (`sim.split_threshold`, N·m·kg⁻¹, ≥ 0), comma-separated:
     /// `--split 0.1,0.2,0.3`.
     #[arg(long, value_name = "LIST", allow_hyphen_values = true)]
     pub split: Option<String>,
