@@ -260,7 +260,7 @@ fn no_source_file_imports_from_a_layer_above_its_own() {
         }
         let own = parts[0].trim_end_matches(".rs");
         let Some(&own_rank) = rank.get(own) else {
-            panic!("{}: module `{own}` is not in LAYERS", rel.display());
+            panic!("src/{}: module `{own}` is not in LAYERS", rel.display());
         };
         // Modules from the crate root to this file's: src/a/b.rs is a::b, src/a/mod.rs is a.
         let depth = parts.len() - usize::from(parts.last() == Some(&"mod.rs"));
