@@ -4,6 +4,8 @@
 
 #[path = "common/rrd.rs"]
 mod rrd;
+#[path = "common/shared.rs"]
+mod shared;
 #[path = "common/tiny_style.rs"]
 mod tiny_style;
 
@@ -101,16 +103,9 @@ fn texts(chunks: &[Chunk], path: &str) -> Vec<String> {
     out
 }
 
-/// Runs the real Rerun CLI's `rrd verify` on `path`, if the tool is installed here.
+/// Runs the real Rerun CLI's `rrd verify` on `path` (`../shared/tools/rerun-cli`).
 fn verify_with_cli(path: &Path) {
-    let tool = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/tools/rerun-cli");
-    if !tool.exists() {
-        eprintln!(
-            "skipping `rerun rrd verify`: {} is not installed",
-            tool.display()
-        );
-        return;
-    }
+    let tool = shared::rerun_cli();
     let out = std::process::Command::new(&tool)
         .args(["rrd", "verify"])
         .arg(path)

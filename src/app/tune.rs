@@ -273,7 +273,7 @@ pub fn apply_key(p: &mut SimParams, action: KeyAction) -> Option<String> {
     let old = *value;
     *value = old * factor;
     let unit = if name.starts_with("split") {
-        "m²/s²"
+        "N·m·kg⁻¹"
     } else {
         "m/s"
     };

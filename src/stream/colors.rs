@@ -73,7 +73,11 @@ pub const COMMON_SERIES: [(&str, (u8, u8, u8), &str); 14] = {
         (p::PAIRS_IN_CONTACT, (255, 120, 200), "pairs in contact"),
         (p::BODY_CONTACTS, (120, 230, 140), "body contacts"),
         (p::KINETIC_ENERGY, (255, 210, 80), "kinetic energy (J)"),
-        (p::SPLIT_THRESHOLD, SPLIT_COLOR, "split threshold (m²/s²)"),
+        (
+            p::SPLIT_THRESHOLD,
+            SPLIT_COLOR,
+            "split threshold (N·m·kg⁻¹)",
+        ),
         (p::MERGE_VELOCITY, MERGE_COLOR, "merge velocity (m/s)"),
         (p::FRICTION, (180, 140, 255), "friction α (1/s)"),
         (p::REPULSION, (255, 140, 90), "repulsion k_r (1/s²)"),
