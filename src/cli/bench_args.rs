@@ -66,7 +66,7 @@ impl BenchArgs {
         let seconds = match self.seconds {
             Some(s) if !(s.is_finite() && s > 0.0 && s <= 3600.0) => {
                 return Err(BadInput(format!(
-                    "--seconds must be a positive number of seconds up to 3600, got {s}"
+                    "--seconds must be a positive number of seconds up to 3600, got {s:?}"
                 ))
                 .into());
             }
