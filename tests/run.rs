@@ -20,7 +20,7 @@ use rerun::external::re_log_types::LogMsg;
 use rerun::log::Chunk;
 use rerun::{LineStrips3D, Points3D, Scalars, TextLog, TimelineName};
 use rrd::rows;
-use wisptree::app::tune::{self, StyleChange};
+use wisptree::app::reload::{self, StyleChange};
 use wisptree::app::{self as run, RunOptions, StopSignal};
 use wisptree::frame::Frame;
 use wisptree::report::{EventKind, StepReport};
@@ -256,13 +256,13 @@ fn reloading_the_style_changes_the_split_threshold_of_the_next_steps_and_broken_
 
     // Unchanged text: nothing to do.
     assert!(matches!(
-        tune::reload(&style, &current),
+        reload::reload(&style, &current),
         StyleChange::Unchanged
     ));
 
     // A threshold so high nothing can split: a parameter change, applied in place.
     std::fs::write(&style, tiny_style("1.0e6")).unwrap();
-    let new = match tune::reload(&style, &current) {
+    let new = match reload::reload(&style, &current) {
         StyleChange::Params(l) => l,
         other => panic!("expected new parameters, got {other:?}"),
     };
@@ -294,12 +294,12 @@ fn reloading_the_style_changes_the_split_threshold_of_the_next_steps_and_broken_
     // Broken edits: a syntax error and an invalid value. Both are errors naming the file, and
     // the caller keeps its style.
     std::fs::write(&style, "Style(hair: ").unwrap();
-    match tune::reload(&style, &current) {
+    match reload::reload(&style, &current) {
         StyleChange::Invalid(e) => assert!(e.to_string().contains("tiny.ron"), "{e}"),
         other => panic!("expected an error, got {other:?}"),
     }
     std::fs::write(&style, tiny_style("-1.0")).unwrap();
-    match tune::reload(&style, &current) {
+    match reload::reload(&style, &current) {
         StyleChange::Invalid(e) => {
             assert!(e.to_string().contains("split_threshold"), "{e}")
         }
@@ -313,7 +313,7 @@ fn reloading_the_style_changes_the_split_threshold_of_the_next_steps_and_broken_
         tiny_style("0.2").replace("cross_sections: 8", "cross_sections: 6"),
     )
     .unwrap();
-    match tune::reload(&style, &current) {
+    match reload::reload(&style, &current) {
         StyleChange::Geometry(b) => assert_eq!(b.1.k, 6),
         other => panic!("expected a new model, got {other:?}"),
     }

@@ -2,7 +2,8 @@
 
 use std::time::Duration;
 
-use super::tune::{self, KeyAction};
+use super::keys::{self, KeyAction};
+use super::terminal;
 
 /// Prints lines around the progress bar and the raw terminal.
 #[derive(Clone, Default)]
@@ -21,7 +22,7 @@ impl Console {
         }
         if let Some(b) = &self.bar {
             b.println(msg);
-        } else if tune::raw_mode_active() {
+        } else if terminal::raw_mode_active() {
             // Raw mode: a newline does not return the carriage.
             eprint!("{}\r\n", msg.replace('\n', "\r\n"));
         } else {
@@ -54,7 +55,7 @@ pub fn poll_key(timeout: Duration) -> std::io::Result<Option<KeyAction>> {
         return Ok(None);
     }
     Ok(match read()? {
-        Event::Key(k) => tune::key_action(&k),
+        Event::Key(k) => keys::key_action(&k),
         _ => None,
     })
 }

@@ -7,8 +7,9 @@ use std::time::{Duration, Instant};
 use crossbeam_channel::{Receiver, Sender, TrySendError};
 
 use super::console::Console;
+use super::keys::{self, KeyAction};
+use super::page_params;
 use super::stop::StopSignal;
-use super::tune::{self, KeyAction};
 use crate::frame::Frame;
 use crate::pipeline::{self, FrameBuilder};
 use crate::report::tempo::{RealtimeMeter, Tempo, SLOW_BELOW};
@@ -149,8 +150,8 @@ impl SimThread {
             paused: false,
             time_offset: 0.0,
             out: SimOutcome::default(),
-            wind_strength: tune::initial_wind_strength(&self.scene.loaded.style.sim.wind),
-            base_wind: tune::base_wind(&self.scene.loaded.style.sim.wind),
+            wind_strength: page_params::initial_wind_strength(&self.scene.loaded.style.sim.wind),
+            base_wind: page_params::base_wind(&self.scene.loaded.style.sim.wind),
             meter: RealtimeMeter::new(),
             said_slow: false,
         };
@@ -247,14 +248,14 @@ impl SimThread {
             };
             match c {
                 Control::Params(p, msg) => {
-                    st.wind_strength = tune::initial_wind_strength(&p.wind);
-                    st.base_wind = tune::base_wind(&p.wind);
+                    st.wind_strength = page_params::initial_wind_strength(&p.wind);
+                    st.base_wind = page_params::base_wind(&p.wind);
                     st.solver.set_params(&p);
                     say(msg, st);
                 }
                 Control::Set(param, value) => {
                     let mut p = st.solver.params().clone();
-                    let msg = tune::apply_param(
+                    let msg = page_params::apply_param(
                         &mut p,
                         &mut st.wind_strength,
                         &st.base_wind,
@@ -293,8 +294,8 @@ impl SimThread {
                     st.said_slow = false;
                     st.meter.restart_clock();
                     st.wind_strength =
-                        tune::initial_wind_strength(&self.scene.loaded.style.sim.wind);
-                    st.base_wind = tune::base_wind(&self.scene.loaded.style.sim.wind);
+                        page_params::initial_wind_strength(&self.scene.loaded.style.sim.wind);
+                    st.base_wind = page_params::base_wind(&self.scene.loaded.style.sim.wind);
                 }
                 Control::Key(KeyAction::TogglePause) => {
                     st.paused = !st.paused;
@@ -317,7 +318,7 @@ impl SimThread {
                 }
                 Control::Key(a) => {
                     let mut p = st.solver.params().clone();
-                    if let Some(msg) = tune::apply_key(&mut p, a) {
+                    if let Some(msg) = keys::apply_key(&mut p, a) {
                         st.solver.set_params(&p);
                         say(msg, st);
                     }

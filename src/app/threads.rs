@@ -10,12 +10,13 @@ use anyhow::Context as _;
 use crossbeam_channel::{Receiver, Sender};
 
 use super::console::{poll_key, Console};
+use super::keys::{self, KeyAction};
 use super::log_thread::LogThread;
 use super::reload::handle_reload;
-use super::run::RunSummary;
-use super::sim_thread::{Control, SimOutcome, SimThread};
+use super::sim_thread::{Control, Load, SimOutcome, SimThread};
 use super::stop::StopSignal;
-use super::tune::{self, KeyAction};
+use super::style_watcher::StyleWatcher;
+use super::terminal::RawTerminal;
 use crate::frame::Frame;
 use crate::scene::Scene;
 use crate::stream::sink::{OpenSink, SinkWatcher, ViewerStatus};
@@ -77,6 +78,33 @@ struct Workers {
     ctl: Sender<Control>,
     notes: Sender<(MessageLevel, String)>,
     logged: Arc<AtomicU64>,
+}
+
+/// What a run did.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct RunSummary {
+    /// Frames handed to Rerun.
+    pub frames_logged: u64,
+    /// Frames the simulation produced but dropped because the logger fell behind (live only).
+    pub frames_dropped: u64,
+    /// Simulated time at the last frame, s (continuing across restarts).
+    pub sim_time: f64,
+    /// Splits over the run.
+    pub splits: u64,
+    /// Merges over the run.
+    pub merges: u64,
+    /// Stopped before the requested duration (Ctrl-C, `q`, a test's stop, a lost viewer).
+    pub interrupted: bool,
+    /// The viewer went away (or never answered).
+    pub viewer_lost: bool,
+    /// Parameter reloads applied.
+    pub reloads: u32,
+    /// Restarts done.
+    pub restarts: u32,
+    /// How fast the simulation's frames came, frame by frame (the real-time factor).
+    pub tempo: crate::report::tempo::Tempo,
+    /// What the solver carried: active nodes, contacts.
+    pub load: Load,
 }
 
 /// Runs the scene into the sink until `opts.seconds` are simulated or `stop` is triggered. A
@@ -273,15 +301,15 @@ fn watch_run(
     summary: &mut RunSummary,
 ) -> Option<String> {
     let raw = if opts.keys {
-        tune::RawTerminal::enter()
+        RawTerminal::enter()
     } else {
         None
     };
     if raw.is_some() {
-        console.say(tune::KEY_HELP);
+        console.say(keys::KEY_HELP);
     }
     let mut watcher = match scene.source.file() {
-        Some(path) if opts.watch => match tune::StyleWatcher::new(path) {
+        Some(path) if opts.watch => match StyleWatcher::new(path) {
             Ok(w) => {
                 console.say(&format!("watching {} for changes", path.display()));
                 Some(w)
@@ -305,7 +333,7 @@ fn watch_run(
                     console.say("quitting");
                     stop.stop();
                 }
-                Ok(Some(KeyAction::Help)) => console.say(tune::KEY_HELP),
+                Ok(Some(KeyAction::Help)) => console.say(keys::KEY_HELP),
                 Ok(Some(a)) => {
                     let _ = w.ctl.send(Control::Key(a));
                 }
@@ -322,14 +350,9 @@ fn watch_run(
             std::thread::sleep(POLL);
         }
         if watcher.as_mut().is_some_and(|w| w.poll()) {
-            handle_reload(
-                &mut current,
-                &mut file_style,
-                &w.ctl,
-                &w.notes,
-                console,
-                summary,
-            );
+            if handle_reload(&mut current, &mut file_style, &w.ctl, &w.notes, console) {
+                summary.reloads += 1;
+            }
         }
         if let Some(web) = &opts.web {
             while let Ok(cmd) = web.commands.try_recv() {
