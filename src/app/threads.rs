@@ -349,10 +349,10 @@ fn watch_run(
         } else {
             std::thread::sleep(POLL);
         }
-        if watcher.as_mut().is_some_and(|w| w.poll()) {
-            if handle_reload(&mut current, &mut file_style, &w.ctl, &w.notes, console) {
-                summary.reloads += 1;
-            }
+        if watcher.as_mut().is_some_and(|w| w.poll())
+            && handle_reload(&mut current, &mut file_style, &w.ctl, &w.notes, console)
+        {
+            summary.reloads += 1;
         }
         if let Some(web) = &opts.web {
             while let Ok(cmd) = web.commands.try_recv() {
