@@ -221,7 +221,7 @@ impl SimThread {
     /// Says once per scene, on the console, the page and in the recording's log, that a live
     /// run fell below real time, and the likely cause.
     fn say_if_slow(&self, st: &mut LoopState, f: &Frame, console: &Console) {
-        if st.said_slow || !st.meter.window_full() || f.realtime_factor >= SLOW_BELOW {
+        if st.said_slow || !st.meter.window_settled() || f.realtime_factor >= SLOW_BELOW {
             return;
         }
         st.said_slow = true;

@@ -93,6 +93,12 @@ impl RealtimeMeter {
         self.filled == WINDOW_FRAMES
     }
 
+    /// Whether the window says enough to judge the pace: a whole second of frames, or, for a
+    /// run so slow that a second of frames is long in coming, two seconds of wall time.
+    pub fn window_settled(&self) -> bool {
+        self.window_full() || self.window[..self.filled].iter().map(|w| w.0).sum::<f64>() >= 2.0
+    }
+
     /// Everything measured since the meter was made (restarts included).
     pub fn tempo(&self) -> &Tempo {
         &self.tempo
@@ -211,6 +217,17 @@ mod tests {
         assert!(!m.window_full());
         assert!((m.record(0.01, 0.04) - 4.0).abs() < 1e-12);
         assert_eq!(m.tempo().frames, 11);
+    }
+
+    #[test]
+    fn a_slow_run_is_judged_after_two_seconds_without_a_full_window() {
+        let mut m = RealtimeMeter::new();
+        for _ in 0..3 {
+            m.record(0.5, 0.04);
+            assert!(!m.window_settled());
+        }
+        m.record(0.5, 0.04);
+        assert!(m.window_settled() && !m.window_full());
     }
 
     #[test]
