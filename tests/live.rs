@@ -228,3 +228,63 @@ fn bench_live_quick_has_every_solver_style_motion_the_slider_ends_and_rendering_
     }
     assert_eq!(rows.len(), 3 * 4 * 5 + 4 * 4 + 4 * 5);
 }
+
+/// The nice value of each of this process's threads whose name starts with `prefix`.
+fn nice_of_threads(prefix: &str) -> Vec<i64> {
+    let mut out = Vec::new();
+    for task in std::fs::read_dir("/proc/self/task").expect("Linux /proc") {
+        let dir = task.unwrap().path();
+        let comm = std::fs::read_to_string(dir.join("comm")).unwrap_or_default();
+        if !comm.trim().starts_with(prefix) {
+            continue;
+        }
+        let stat = std::fs::read_to_string(dir.join("stat")).unwrap_or_default();
+        // Fields after the parenthesised name: state is field 3, nice is field 19.
+        if let Some((_, rest)) = stat.rsplit_once(") ") {
+            if let Some(n) = rest.split(' ').nth(16) {
+                out.push(n.parse().unwrap());
+            }
+        }
+    }
+    out
+}
+
+#[test]
+#[cfg(target_os = "linux")]
+fn the_render_threads_run_at_a_lower_priority_than_the_simulation() {
+    let dir = tempfile::tempdir().unwrap();
+    let style = dir.path().join("tiny.ron");
+    std::fs::write(&style, tiny_style::tiny_style("0.2")).unwrap();
+    let out = dir.path().join("out.rrd");
+    let stop = StopSignal::new();
+    let opts = RunOptions {
+        style: style.display().to_string(),
+        motion: "shake".into(),
+        seconds: Some(30.0),
+        strands: 20,
+        watch: Some(false),
+        sink: SinkChoice::Save(out),
+        render: Some((160, 120)),
+        ..RunOptions::default()
+    };
+    let run = {
+        let stop = stop.clone();
+        std::thread::spawn(move || run::run_with(opts, stop))
+    };
+    let deadline = std::time::Instant::now() + std::time::Duration::from_secs(60);
+    let (mut render, mut sim) = (Vec::new(), Vec::new());
+    while std::time::Instant::now() < deadline && (render.is_empty() || sim.is_empty()) {
+        std::thread::sleep(std::time::Duration::from_millis(50));
+        render = nice_of_threads("wisptree-render");
+        sim = nice_of_threads("wisptree-sim");
+    }
+    stop.stop();
+    run.join().unwrap().expect("the run succeeds");
+    assert!(!sim.is_empty(), "no simulation thread seen");
+    // The render thread and its pool's workers (wisptree-render-N) all run nicer.
+    assert!(render.len() >= 2, "render threads seen: {render:?}");
+    assert!(
+        render.iter().all(|&r| r > sim[0]),
+        "render nice {render:?}, simulation {sim:?}"
+    );
+}

@@ -191,33 +191,23 @@ fn start_workers(
 ) -> anyhow::Result<Workers> {
     let (frame_tx, sim_rx) = crossbeam_channel::bounded::<Frame>(QUEUE_FRAMES);
     // With rendering, frames go simulation → renderer → logger; without, straight through.
-    let (frame_rx, renderer) = match opts.render {
-        Some((w, h)) => {
+    let frame_rx = match opts.render {
+        Some(size) => {
             let (tx, rx) = crossbeam_channel::bounded::<Frame>(QUEUE_FRAMES);
-            let r = crate::render::Renderer::new(
-                scene.loaded.style.render.clone(),
-                w,
-                h,
-                crate::render::default_threads(),
-            )
-            .map_err(|e| crate::error::BadInput(format!("rendering: {e}")))?;
-            let thread = super::render_thread::RenderThread {
-                renderer: r,
+            let setup = super::render_thread::RenderSetup {
+                params: scene.loaded.style.render.clone(),
+                size,
                 camera: super::render_thread::scene_camera(scene),
                 input: sim_rx,
                 output: tx,
                 live: opts.render_skips_when_behind,
             };
-            (rx, Some(thread))
+            super::render_thread::start(setup)
+                .map_err(|e| crate::error::BadInput(format!("rendering: {e}")))?;
+            rx
         }
-        None => (sim_rx, None),
+        None => sim_rx,
     };
-    if let Some(t) = renderer {
-        std::thread::Builder::new()
-            .name("wisptree-render".into())
-            .spawn(move || t.run())
-            .context("starting the render thread")?;
-    }
     // Unbounded, but it never holds more frames than exist: QUEUE_FRAMES + 2 or so.
     let (free_tx, free_rx) = crossbeam_channel::unbounded::<Frame>();
     let (ctl_tx, ctl_rx) = crossbeam_channel::unbounded::<Control>();
