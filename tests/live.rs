@@ -2,51 +2,20 @@
 //! (`/stats/realtime_factor`), a live run that falls behind says why, and `bench --live`
 //! measures every solver × style × motion and the page's slider ends.
 
+#[path = "common/rrd.rs"]
+mod rrd;
 #[path = "common/tiny_style.rs"]
 mod tiny_style;
 
 use std::collections::BTreeSet;
-use std::io::BufReader;
 use std::process::Command;
 
-use rerun::external::re_log_types::LogMsg;
-use rerun::log::Chunk;
-use rerun::{Scalars, TimelineName};
 use wisptree::app::{self as run, RunOptions, StopSignal};
 use wisptree::frame::Frame;
 use wisptree::report::paths::REALTIME_FACTOR;
 use wisptree::scene::Scene;
 use wisptree::solver::SolverKind;
 use wisptree::stream::sink::SinkChoice;
-
-/// `(frame, value)` of the scalar series at `path` in the recording at `file`.
-fn scalars(file: &std::path::Path, path: &str) -> Vec<(i64, f64)> {
-    let f = std::fs::File::open(file).expect("the recording exists");
-    let path: rerun::EntityPath = path.into();
-    let timeline = TimelineName::from("frame");
-    let component = Scalars::descriptor_scalars().component;
-    let mut out = Vec::new();
-    for msg in rerun::external::re_log_encoding::DecoderApp::decode_lazy(BufReader::new(f)) {
-        let LogMsg::ArrowMsg(store, arrow) = msg.expect("every message decodes") else {
-            continue;
-        };
-        if store.is_blueprint() {
-            continue;
-        }
-        let c = Chunk::from_arrow_msg(&arrow).expect("chunk decodes");
-        if *c.entity_path() != path {
-            continue;
-        }
-        for ((t, _), v) in c
-            .iter_component_indices(timeline, component)
-            .zip(c.iter_component::<rerun::components::Scalar>(component))
-        {
-            out.push((t.as_i64(), v.as_slice()[0].0 .0));
-        }
-    }
-    out.sort_by_key(|a| a.0);
-    out
-}
 
 #[test]
 fn a_recording_logs_the_realtime_factor_of_every_frame() {
@@ -68,7 +37,7 @@ fn a_recording_logs_the_realtime_factor_of_every_frame() {
         StopSignal::new(),
     )
     .expect("the run succeeds");
-    let series = scalars(&out, REALTIME_FACTOR);
+    let series = rrd::scalars(&rrd::decode_file(&out), REALTIME_FACTOR);
     assert_eq!(
         series.iter().map(|s| s.0).collect::<Vec<_>>(),
         (0..25).collect::<Vec<_>>(),

@@ -10,16 +10,14 @@ mod shared;
 mod tiny_style;
 
 use std::collections::BTreeMap;
-use std::io::BufReader;
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
 use tiny_style::tiny_style;
 
-use rerun::external::re_log_types::LogMsg;
 use rerun::log::Chunk;
-use rerun::{LineStrips3D, Points3D, Scalars, TextLog, TimelineName};
-use rrd::rows;
+use rerun::{LineStrips3D, Points3D, TextLog};
+use rrd::{decode_file, rows, scalars};
 use wisptree::app::reload::{self, StyleChange};
 use wisptree::app::{self as run, RunOptions, StopSignal};
 use wisptree::frame::Frame;
@@ -55,40 +53,6 @@ fn args(style: &Path, out: &Path, seconds: f64, watch: bool) -> RunOptions {
 
 fn load(style: &Path) -> Scene {
     Scene::load(&style.display().to_string(), MOTION, SolverKind::Awt).unwrap()
-}
-
-/// The recording's (non-blueprint) chunks, decoded from the file with the SDK's decoder.
-fn decode_file(path: &Path) -> Vec<Chunk> {
-    let file = std::fs::File::open(path).expect("the recording exists");
-    let mut chunks = Vec::new();
-    for msg in rerun::external::re_log_encoding::DecoderApp::decode_lazy(BufReader::new(file)) {
-        match msg.expect("every message decodes") {
-            LogMsg::ArrowMsg(store, arrow) if !store.is_blueprint() => {
-                chunks.push(Chunk::from_arrow_msg(&arrow).expect("chunk decodes"));
-            }
-            _ => {}
-        }
-    }
-    assert!(!chunks.is_empty(), "{}: no data", path.display());
-    chunks
-}
-
-/// `(frame, value)` of a scalar series.
-fn scalars(chunks: &[Chunk], path: &str) -> Vec<(i64, f64)> {
-    let path: rerun::EntityPath = path.into();
-    let timeline = TimelineName::from("frame");
-    let component = Scalars::descriptor_scalars().component;
-    let mut out = Vec::new();
-    for c in chunks.iter().filter(|c| *c.entity_path() == path) {
-        for ((t, _), v) in c
-            .iter_component_indices(timeline, component)
-            .zip(c.iter_component::<rerun::components::Scalar>(component))
-        {
-            out.push((t.as_i64(), v.as_slice()[0].0 .0));
-        }
-    }
-    out.sort_by_key(|a| a.0);
-    out
 }
 
 fn texts(chunks: &[Chunk], path: &str) -> Vec<String> {
