@@ -39,77 +39,85 @@ pub struct Coeffs {
     pub envelope_damping: f64,
 }
 
-#[inline]
-fn is_root(w: &Wisps, p: usize) -> bool {
-    w.start[w.wisp_of[p] as usize] as usize == p
-}
-
-#[inline]
-fn is_tip(w: &Wisps, p: usize) -> bool {
-    w.start[w.wisp_of[p] as usize + 1] as usize == p + 1
-}
-
 /// §5.1 item 1: every force, from the current positions and frames.
 pub fn accumulate_forces(w: &mut Wisps, c: &Coeffs) {
     let n = w.point_count();
-    for (f, m) in w.force.iter_mut().zip(&w.mass) {
+    let Wisps {
+        start,
+        pos,
+        force,
+        mass,
+        rest_len,
+        rest_dir,
+        t,
+        u,
+        v,
+        rho,
+        rho_rest,
+        rho_force,
+        ring_rest,
+        ..
+    } = w;
+    for (f, m) in force.iter_mut().zip(mass.iter()) {
         *f = c.gravity * *m;
     }
-    for p in 0..n {
-        if is_tip(w, p) {
-            continue;
+    for r in start.windows(2) {
+        let (a, b) = (r[0] as usize, r[1] as usize);
+        for p in a..b.saturating_sub(1) {
+            let q = p + 1;
+            let s = pos[q] - pos[p];
+            let len = s.norm();
+            if len < 1e-12 {
+                continue;
+            }
+            let d = s / len;
+            let m = mass[p].min(mass[q]);
+            // Linear spring (§3.2).
+            let f = d * (-c.stiffness * m * (len - rest_len[p]));
+            // Angular spring (§3.2): the segment is pulled towards its rest direction expressed
+            // in its start's twist-free section frame; only the part across the segment bends it.
+            let rd = rest_dir[p];
+            let target = (t[p] * rd.x + u[p] * rd.y + v[p] * rd.z) * len;
+            let diff = target - s;
+            let bend = (diff - d * diff.dot(&d)) * (c.bending * mass[q]);
+            force[q] += f + bend;
+            force[p] -= f + bend;
         }
-        let q = p + 1;
-        let s = w.pos[q] - w.pos[p];
-        let len = s.norm();
-        if len < 1e-12 {
-            continue;
-        }
-        let d = s / len;
-        let m = w.mass[p].min(w.mass[q]);
-        // Linear spring (§3.2).
-        let f = d * (-c.stiffness * m * (len - w.rest_len[p]));
-        // Angular spring (§3.2): the segment is pulled towards its rest direction expressed in
-        // its start's twist-free section frame; only the part across the segment bends it.
-        let v = w.t[p].cross(&w.u[p]);
-        let rd = w.rest_dir[p];
-        let target = (w.t[p] * rd.x + w.u[p] * rd.y + v * rd.z) * len;
-        let diff = target - s;
-        let bend = (diff - d * diff.dot(&d)) * (c.bending * w.mass[q]);
-        w.force[q] += f + bend;
-        w.force[p] -= f + bend;
     }
     // Envelope (§3.3): radial springs to the skeleton point, ring springs between neighbours
     // of a section. The part of a ring force across an envelope point's half-line is the
     // constraint's reaction: it goes to the skeleton point.
+    let rho = &rho[..n * ENV];
+    let rho_rest = &rho_rest[..n * ENV];
+    let ring_rest = &ring_rest[..n * ENV];
+    let rho_force = &mut rho_force[..n * ENV];
     for p in 0..n {
-        let me = c.envelope_mass * w.mass[p];
+        let me = c.envelope_mass * mass[p];
         let mut skel = Vector3::zeros();
-        let mut dirs = [Vector3::zeros(); ENV];
-        for (j, d) in dirs.iter_mut().enumerate() {
-            *d = w.env_dir(p, j);
+        let dirs = [u[p], v[p], -u[p], -v[p]];
+        let e0 = p * ENV;
+        let r: &[f64; ENV] = rho[e0..e0 + ENV].try_into().unwrap();
+        let r0: &[f64; ENV] = rho_rest[e0..e0 + ENV].try_into().unwrap();
+        let d0s: &[f64; ENV] = ring_rest[e0..e0 + ENV].try_into().unwrap();
+        let rf: &mut [f64; ENV] = (&mut rho_force[e0..e0 + ENV]).try_into().unwrap();
+        for j in 0..ENV {
+            let radial = -c.envelope_stiffness * me * (r[j] - r0[j]);
+            rf[j] = radial;
+            skel -= dirs[j] * radial;
         }
-        for (j, dir) in dirs.iter().enumerate() {
-            let e = p * ENV + j;
-            let radial = -c.envelope_stiffness * me * (w.rho[e] - w.rho_rest[e]);
-            w.rho_force[e] = radial;
-            skel -= dir * radial;
-        }
-        for (j, dir) in dirs.iter().enumerate() {
+        for j in 0..ENV {
             let k = (j + 1) % ENV;
-            let (ej, ek) = (p * ENV + j, p * ENV + k);
-            let (rj, rk) = (w.rho[ej], w.rho[ek]);
+            let (rj, rk) = (r[j], r[k]);
             let d = (rj * rj + rk * rk).sqrt();
-            let d0 = (w.rho_rest[ej].powi(2) + w.rho_rest[ek].powi(2)).sqrt();
             if d < 1e-12 {
                 continue;
             }
-            let cc = c.ring_stiffness * me * (d - d0) / d;
-            w.rho_force[ej] -= cc * rj;
-            w.rho_force[ek] -= cc * rk;
-            skel += (dir * rj + dirs[k] * rk) * cc;
+            let cc = c.ring_stiffness * me * (d - d0s[j]) / d;
+            rf[j] -= cc * rj;
+            rf[k] -= cc * rk;
+            skel += (dirs[j] * rj + dirs[k] * rk) * cc;
         }
-        w.force[p] += skel;
+        force[p] += skel;
     }
 }
 
@@ -167,9 +175,9 @@ fn integrate_envelope(w: &mut Wisps, c: &Coeffs, p: usize, root: bool, dt: f64) 
     let ms = if root { KINEMATIC_MASS } else { w.mass[p] };
     let me = c.envelope_mass * w.mass[p];
     let acc = (w.vel[p] - w.prev_vel[p]) / dt;
-    for j in 0..ENV {
+    let dirs = w.env_dirs(p);
+    for (j, &dir) in dirs.iter().enumerate() {
         let e = p * ENV + j;
-        let dir = w.env_dir(p, j);
         w.rho_rate[e] += (w.rho_force[e] / me + (c.gravity - acc).dot(&dir)) * dt;
         let vs = dir * w.vel[p].dot(&dir);
         let ve = vs + dir * w.rho_rate[e];
@@ -185,17 +193,17 @@ fn integrate_envelope(w: &mut Wisps, c: &Coeffs, p: usize, root: bool, dt: f64) 
 /// envelope radius stays positive: a crushed section stops at [`MIN_RHO_FRACTION`] of its rest
 /// radius.
 pub fn integrate_positions(w: &mut Wisps, dt: f64) {
-    for p in 0..w.point_count() {
-        if !is_root(w, p) {
-            w.pos[p] += w.vel[p] * dt;
+    for ((x, v), &root) in w.pos.iter_mut().zip(&w.vel).zip(&w.is_root) {
+        if !root {
+            *x += v * dt;
         }
     }
-    for e in 0..w.rho.len() {
-        w.rho[e] += w.rho_rate[e] * dt;
-        let lo = MIN_RHO_FRACTION * w.rho_rest[e];
-        if w.rho[e] < lo {
-            w.rho[e] = lo;
-            w.rho_rate[e] = w.rho_rate[e].max(0.0);
+    for ((r, rate), &rest) in w.rho.iter_mut().zip(w.rho_rate.iter_mut()).zip(&w.rho_rest) {
+        *r += *rate * dt;
+        let lo = MIN_RHO_FRACTION * rest;
+        if *r < lo {
+            *r = lo;
+            *rate = rate.max(0.0);
         }
     }
 }

@@ -75,6 +75,7 @@ pub struct LayeredSolver {
     /// The wisps' state.
     pub wisps: Wisps,
     detector: Detector,
+    section_cache: response::SectionCache,
     balls: Vec<Ball>,
     strand_map: StrandMap,
     level: usize,
@@ -103,6 +104,7 @@ impl LayeredSolver {
             .unwrap_or_else(|| params::default_stiffness(&style.link));
         let mut s = LayeredSolver {
             detector: Detector::new(&wisps),
+            section_cache: response::SectionCache::new(&wisps),
             coeffs: coeffs(params, &lp, stiffness),
             pose: motion.pose(0.0),
             body_every: every(lp.body_rate),
@@ -273,7 +275,13 @@ impl Solver for LayeredSolver {
                 envelope_mass: lp.envelope_mass,
                 dt_c: dt * self.interaction_every as f64,
             };
-            counts = response::respond(w, &self.detector.pairs, &self.detector.contacts, &pp);
+            counts = response::respond(
+                w,
+                &self.detector.pairs,
+                &self.detector.contacts,
+                &pp,
+                &mut self.section_cache,
+            );
         }
         let mut body_contacts = 0;
         if body_step {
@@ -380,7 +388,7 @@ impl Solver for LayeredSolver {
     }
 
     fn reserved_bytes(&self) -> usize {
-        self.detector.capacity_bytes()
+        self.detector.capacity_bytes() + self.section_cache.capacity_bytes()
     }
 }
 
