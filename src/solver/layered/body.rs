@@ -173,9 +173,31 @@ fn near_balls(w: &Wisps, p: usize, balls: &[Ball], threshold: f64) -> u64 {
 /// their half-lines to the surface and lose their approaching radial velocity. Needs frames of
 /// the current positions; returns the points moved.
 pub fn penetration_reaction(w: &mut Wisps, balls: &[Ball], pose: &Pose, margin: f64) -> u32 {
+    reaction(w, balls, pose, margin, false)
+}
+
+/// [`penetration_reaction`] on wisps whose frames may be stale: a wisp with a section near a
+/// ball gets the frames of its current positions first; the others cannot touch a ball and
+/// are left as they are (their frames too).
+pub fn penetration_reaction_framing(
+    w: &mut Wisps,
+    balls: &[Ball],
+    pose: &Pose,
+    margin: f64,
+) -> u32 {
+    reaction(w, balls, pose, margin, true)
+}
+
+fn reaction(w: &mut Wisps, balls: &[Ball], pose: &Pose, margin: f64, framing: bool) -> u32 {
     let mut moved = 0;
     for wi in 0..w.len() {
         let r = w.points(wi);
+        if framing {
+            if (r.start + 1..r.end).all(|p| near_balls(w, p, balls, 0.0) == 0) {
+                continue;
+            }
+            w.compute_wisp_frames(wi, pose);
+        }
         let moved_before = moved;
         for p in r.start + 1..r.end {
             let before = w.pos[p];

@@ -238,6 +238,9 @@ impl Detector {
         for (own, other, oi) in [(pa, pb, j), (pb, pa, i)] {
             let q = own + 1;
             let ax = self.axis[oi];
+            if !section_may_enter(w, q, other, &ax) {
+                continue;
+            }
             for which in 0..=ENV {
                 let x = if which == ENV {
                     w.pos[q]
@@ -285,6 +288,27 @@ pub fn inside_segment(w: &Wisps, p: usize, x: &Vector3<f64>) -> Option<f64> {
     let d = r.norm();
     let radius = (1.0 - s) * section_radius(w, p, &r) + s * section_radius(w, p + 1, &r);
     (d < radius).then_some(s)
+}
+
+/// Whether any of the 5 points of section `q` (within its largest radius of its skeleton
+/// point) can be inside segment `p`'s volume: its skeleton point is within the two reaches of
+/// the segment's axis. A conservative bound, with a margin for rounding.
+#[inline]
+fn section_may_enter(w: &Wisps, q: usize, p: usize, ax: &SegAxis) -> bool {
+    let x = w.pos[q];
+    let a = w.pos[p];
+    let s = if ax.l2 > 0.0 {
+        ((x - a).dot(&ax.ab) / ax.l2).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    let d2 = (x - (a + ax.ab * s)).norm_squared();
+    let own = w.rho[q * ENV..q * ENV + ENV]
+        .iter()
+        .fold(0.0f64, |m, &r| m.max(r))
+        * (1.0 + 1e-9);
+    let lim = ax.reach2.sqrt() + own + 1e-12;
+    d2 <= lim * lim
 }
 
 /// [`inside_segment`] with the segment's axis computed once: the same arithmetic, and a point

@@ -147,13 +147,19 @@ impl LayeredSolver {
 
     /// Kinetic energy of the skeleton and envelope points, J.
     pub fn kinetic_energy(&self) -> f64 {
+        // An envelope point moves at its skeleton point's velocity plus its radial rate along
+        // ±u or ±v: over the 4 of a section, |v_e|² sums to 4|v|² + 2(v·u)(ρ̇₀ − ρ̇₂)
+        // + 2(v·v̂)(ρ̇₁ − ρ̇₃) + Σρ̇².
         let w = &self.wisps;
         let mut e = 0.0;
         for p in 0..w.point_count() {
-            e += 0.5 * w.mass[p] * w.vel[p].norm_squared();
-            for j in 0..ENV {
-                e += 0.5 * self.layered.envelope_mass * w.mass[p] * w.env_vel(p, j).norm_squared();
-            }
+            let v = w.vel[p];
+            let r = &w.rho_rate[p * ENV..p * ENV + ENV];
+            let v2 = v.norm_squared();
+            let env = 4.0 * v2
+                + 2.0 * (v.dot(&w.u[p]) * (r[0] - r[2]) + v.dot(&w.v[p]) * (r[1] - r[3]))
+                + r.iter().map(|x| x * x).sum::<f64>();
+            e += 0.5 * w.mass[p] * (v2 + self.layered.envelope_mass * env);
         }
         e
     }
@@ -293,11 +299,11 @@ impl Solver for LayeredSolver {
         // 4. Positions, then position modifications.
         forces::integrate_positions(w, dt);
         if body_step {
-            // The reaction moves envelope points along their half-lines in the new sections
-            // (the next step's forces and `sync_display` recompute the frames anyway).
-            w.compute_frames(&self.pose);
+            // The reaction moves envelope points along their half-lines in the new sections:
+            // those of the wisps near the body are computed (the next step's forces and
+            // `sync_display` recompute every frame anyway).
             let margin = 0.9 * lp.body_threshold;
-            body::penetration_reaction(w, &self.balls, &self.pose, margin);
+            body::penetration_reaction_framing(w, &self.balls, &self.pose, margin);
         }
         self.time = t_new;
         self.steps += 1;
