@@ -7,7 +7,6 @@
 use nalgebra::Vector3;
 
 use super::wisp::{Wisps, ENV, MIN_RHO_FRACTION};
-use crate::solver::awt::dynamics::damp_relative;
 
 /// Mass standing for "kinematic" (the root, which the head moves) in the §5.2 mass shares.
 pub const KINEMATIC_MASS: f64 = 1e30;
@@ -39,6 +38,54 @@ pub struct Coeffs {
     pub envelope_damping: f64,
 }
 
+/// The mass shares of the §5.2 dampings, per skeleton point: `min(ν·dt, 1)·m₂/(m₁ + m₂)` and
+/// `min(ν·dt, 1)·m₁/(m₁ + m₂)` for the linear and the angular damper of the segment that ends
+/// at the point (m₁ the previous point's mass, kinematic for a root), and for the envelope's
+/// radial dampers (m₁ the point's, m₂ an envelope point's). Masses and rates do not change
+/// during a run, so they are computed once.
+#[derive(Debug, Clone, Default)]
+pub struct Shares {
+    /// Per point: linear (to previous, to this), angular (to previous, to this).
+    skeleton: Vec<[f64; 4]>,
+    /// Per point: envelope damping (to the skeleton point, to the envelope point).
+    envelope: Vec<[f64; 2]>,
+}
+
+impl Shares {
+    /// The shares of `w`'s points under `c` at step `dt`.
+    pub fn new(w: &Wisps, c: &Coeffs, dt: f64) -> Shares {
+        let mut s = Shares::default();
+        s.update(w, c, dt);
+        s
+    }
+
+    /// Recomputes them in place (same point count).
+    pub fn update(&mut self, w: &Wisps, c: &Coeffs, dt: f64) {
+        let n = w.point_count();
+        let pair = |nu: f64, m1: f64, m2: f64| {
+            let f = (nu * dt).clamp(0.0, 1.0);
+            [f * m2 / (m1 + m2), f * m1 / (m1 + m2)]
+        };
+        self.skeleton.resize(n, [0.0; 4]);
+        self.envelope.resize(n, [0.0; 2]);
+        for p in 0..n {
+            let m = w.mass[p];
+            if !w.is_root[p] {
+                let mq = if w.is_root[p - 1] {
+                    KINEMATIC_MASS
+                } else {
+                    w.mass[p - 1]
+                };
+                let [a, b] = pair(c.damping, mq, m);
+                let [e, f] = pair(c.bending_damping, mq, m);
+                self.skeleton[p] = [a, b, e, f];
+            }
+            let ms = if w.is_root[p] { KINEMATIC_MASS } else { m };
+            self.envelope[p] = pair(c.envelope_damping, ms, c.envelope_mass * m);
+        }
+    }
+}
+
 /// §5.1 item 1: every force, from the current positions and frames.
 pub fn accumulate_forces(w: &mut Wisps, c: &Coeffs) {
     let n = w.point_count();
@@ -56,6 +103,8 @@ pub fn accumulate_forces(w: &mut Wisps, c: &Coeffs) {
         rho_rest,
         rho_force,
         ring_rest,
+        seg_len,
+        seg_dir,
         ..
     } = w;
     for (f, m) in force.iter_mut().zip(mass.iter()) {
@@ -66,11 +115,11 @@ pub fn accumulate_forces(w: &mut Wisps, c: &Coeffs) {
         for p in a..b.saturating_sub(1) {
             let q = p + 1;
             let s = pos[q] - pos[p];
-            let len = s.norm();
+            let len = seg_len[p];
             if len < 1e-12 {
                 continue;
             }
-            let d = s / len;
+            let d = seg_dir[p];
             let m = mass[p].min(mass[q]);
             // Linear spring (§3.2).
             let f = d * (-c.stiffness * m * (len - rest_len[p]));
@@ -123,7 +172,7 @@ pub fn accumulate_forces(w: &mut Wisps, c: &Coeffs) {
 
 /// §5.1 item 3: new velocities from the forces, then the velocity modifications of the springs'
 /// damping and of the air drag (§5.2: each reduces a relative velocity, never reverses it).
-pub fn integrate_velocities(w: &mut Wisps, c: &Coeffs, dt: f64) {
+pub fn integrate_velocities(w: &mut Wisps, c: &Coeffs, sh: &Shares, dt: f64) {
     for wi in 0..w.len() {
         let r = w.points(wi);
         // The angular damper damps the rate of change of the bend: the velocity of a segment's
@@ -137,23 +186,22 @@ pub fn integrate_velocities(w: &mut Wisps, c: &Coeffs, dt: f64) {
                 let m = w.mass[p];
                 w.vel[p] += w.force[p] * (dt / m);
                 let q = p - 1;
-                let s = w.pos[p] - w.pos[q];
-                let len = s.norm().max(1e-9);
-                let d = s / len;
-                let mq = if q == r.start {
-                    KINEMATIC_MASS
+                let l = w.seg_len[q];
+                let len = l.max(1e-9);
+                let d = if l >= 1e-9 {
+                    w.seg_dir[q]
                 } else {
-                    w.mass[q]
+                    (w.pos[p] - w.pos[q]) / len
                 };
+                let [lq, lp, bq, bp] = sh.skeleton[p];
                 // Linear spring damping along the segment (§5.2).
                 let (vq, vp) = (w.vel[q], w.vel[p]);
-                let (dq1, dp1) =
-                    damp_relative(d * vq.dot(&d), mq, d * vp.dot(&d), m, c.damping, dt);
+                let (dq1, dp1) = damp_shared(d * vq.dot(&d), d * vp.dot(&d), lq, lp);
                 // Angular spring damping across it, about the rigid continuation.
                 let rel = vp - vq;
                 let expected = prev_rel * (len / prev_len);
                 let dev = (rel - expected) - d * (rel - expected).dot(&d);
-                let (dq2, dp2) = damp_relative(Vector3::zeros(), mq, dev, m, c.bending_damping, dt);
+                let (dq2, dp2) = damp_shared(Vector3::zeros(), dev, bq, bp);
                 w.vel[p] += dp1 + dp2;
                 if q != r.start {
                     w.vel[q] += dq1 + dq2;
@@ -164,16 +212,16 @@ pub fn integrate_velocities(w: &mut Wisps, c: &Coeffs, dt: f64) {
                 prev_rel = w.vel[p] - w.vel[q];
                 prev_len = len;
             }
-            integrate_envelope(w, c, p, root, dt);
+            integrate_envelope(w, c, sh, p, root, dt);
         }
     }
 }
 
 /// The envelope of skeleton point `p`, after it: the radial equation in the frame of the
 /// (accelerating) skeleton point, then the §5.2 damping of the radial springs.
-fn integrate_envelope(w: &mut Wisps, c: &Coeffs, p: usize, root: bool, dt: f64) {
-    let ms = if root { KINEMATIC_MASS } else { w.mass[p] };
+fn integrate_envelope(w: &mut Wisps, c: &Coeffs, sh: &Shares, p: usize, root: bool, dt: f64) {
     let me = c.envelope_mass * w.mass[p];
+    let [ks, ke] = sh.envelope[p];
     let acc = (w.vel[p] - w.prev_vel[p]) / dt;
     let dirs = w.env_dirs(p);
     for (j, &dir) in dirs.iter().enumerate() {
@@ -181,12 +229,25 @@ fn integrate_envelope(w: &mut Wisps, c: &Coeffs, p: usize, root: bool, dt: f64) 
         w.rho_rate[e] += (w.rho_force[e] / me + (c.gravity - acc).dot(&dir)) * dt;
         let vs = dir * w.vel[p].dot(&dir);
         let ve = vs + dir * w.rho_rate[e];
-        let (dvs, dve) = damp_relative(vs, ms, ve, me, c.envelope_damping, dt);
+        let (dvs, dve) = damp_shared(vs, ve, ks, ke);
         w.rho_rate[e] += dve.dot(&dir) - dvs.dot(&dir);
         if !root {
             w.vel[p] += dvs;
         }
     }
+}
+
+/// `damp_relative` of the AWT's dynamics (§5.2) with its mass shares already computed
+/// ([`Shares`]): the same arithmetic.
+#[inline]
+fn damp_shared(
+    v1: Vector3<f64>,
+    v2: Vector3<f64>,
+    share1: f64,
+    share2: f64,
+) -> (Vector3<f64>, Vector3<f64>) {
+    let rel = v2 - v1;
+    (rel * share1, -rel * share2)
 }
 
 /// §5.1 item 4: new positions from the new velocities (the roots are placed by the pose). The

@@ -72,6 +72,7 @@ pub struct LayeredSolver {
     /// The `layered:` section in force.
     pub layered: LayeredParams,
     coeffs: Coeffs,
+    shares: forces::Shares,
     /// The wisps' state.
     pub wisps: Wisps,
     detector: Detector,
@@ -102,10 +103,12 @@ impl LayeredSolver {
         let stiffness = lp
             .stiffness
             .unwrap_or_else(|| params::default_stiffness(&style.link));
+        let coeffs = coeffs(params, &lp, stiffness);
         let mut s = LayeredSolver {
+            shares: forces::Shares::new(&wisps, &coeffs, dt),
             detector: Detector::new(&wisps),
             section_cache: response::SectionCache::new(&wisps),
-            coeffs: coeffs(params, &lp, stiffness),
+            coeffs,
             pose: motion.pose(0.0),
             body_every: every(lp.body_rate),
             interaction_every: every(lp.interaction_rate),
@@ -235,6 +238,7 @@ impl Solver for LayeredSolver {
     fn set_params(&mut self, params: &SimParams) {
         self.params = params.clone();
         self.coeffs = coeffs(params, &self.layered, self.coeffs.stiffness);
+        self.shares.update(&self.wisps, &self.coeffs, self.dt);
     }
 
     fn ignored_params(&self) -> &'static [&'static str] {
@@ -271,7 +275,7 @@ impl Solver for LayeredSolver {
             self.detector.detect(w);
         }
         // 3. Velocities, then velocity modifications.
-        forces::integrate_velocities(w, &self.coeffs, dt);
+        forces::integrate_velocities(w, &self.coeffs, &self.shares, dt);
         let mut counts = response::PairCounts::default();
         if interact {
             let pp = response::PairParams {

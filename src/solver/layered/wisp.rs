@@ -61,6 +61,12 @@ pub struct Wisps {
     /// Per skeleton point: the section frame's second axis `t × u`, kept with the frame by
     /// [`Wisps::compute_frames`] (so the envelope's half-lines cost no cross product).
     pub v: Vec<Vector3<f64>>,
+    /// Per skeleton point `p`: the length of segment `p → p + 1` (0 at the tip), m, and its
+    /// direction (`seg_dir`, the segment over its length when that is not 0), as
+    /// [`Wisps::compute_frames`] last found them.
+    pub seg_len: Vec<f64>,
+    /// See `seg_len`.
+    pub seg_dir: Vec<Vector3<f64>>,
     /// Per skeleton point: the root of its wisp (moved by the head, not simulated).
     pub is_root: Vec<bool>,
     /// Per envelope point: distance from the skeleton point along its half-line, m.
@@ -124,6 +130,8 @@ impl Wisps {
         w.t = vec![Vector3::y(); n];
         w.u = vec![Vector3::x(); n];
         w.v = vec![Vector3::z(); n];
+        w.seg_len = vec![0.0; n];
+        w.seg_dir = vec![Vector3::zeros(); n];
         w.is_root = vec![false; n];
         for wi in 0..w.len() {
             let first = w.start[wi] as usize;
@@ -285,9 +293,13 @@ impl Wisps {
         let mut t_prev = pose.transform_vector(&self.t0_rest[wi]);
         for p in r.clone() {
             let t = if p + 1 < r.end {
-                let d = (self.pos[p + 1] - self.pos[p])
-                    .try_normalize(1e-12)
-                    .unwrap_or(d_prev);
+                let s = self.pos[p + 1] - self.pos[p];
+                let len = s.norm();
+                if len > 0.0 {
+                    self.seg_dir[p] = s / len;
+                }
+                self.seg_len[p] = len;
+                let d = if len > 1e-12 { self.seg_dir[p] } else { d_prev };
                 let t = bisector(&d_prev, &d);
                 d_prev = d;
                 t
