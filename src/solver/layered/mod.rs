@@ -94,7 +94,7 @@ impl LayeredSolver {
     /// `params.settle` seconds in the starting pose.
     pub fn new(model: Arc<HairModel>, motion: Motion, params: &SimParams, style: &Style) -> Self {
         let lp = style.layered.clone();
-        let level = lp.level.min(model.level_count() - 1);
+        let level = wisp_level(&model, &lp);
         let wisps = Wisps::build(&model, level);
         let strand_map = StrandMap::build(&model, &wisps, level, lp.jitter);
         let dt = 1.0 / lp.rate;
@@ -188,6 +188,17 @@ impl LayeredSolver {
         w.pose_roots(&self.pose);
         w.compute_frames(&self.pose);
     }
+}
+
+/// The level whose GCs become wisps: `layered.level`, coarsened while it has more than
+/// `layered.max_segments` segments.
+pub fn wisp_level(model: &HairModel, lp: &LayeredParams) -> usize {
+    let mut level = lp.level.min(model.level_count() - 1);
+    let segments = |l: usize| model.levels[l].gc_count() * model.k.saturating_sub(1);
+    while level > 0 && lp.max_segments > 0 && segments(level) > lp.max_segments {
+        level -= 1;
+    }
+    level
 }
 
 fn coeffs(p: &SimParams, lp: &LayeredParams, stiffness: f64) -> Coeffs {
