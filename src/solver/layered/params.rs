@@ -11,7 +11,8 @@ use serde::{Deserialize, Serialize};
 pub struct LayeredParams {
     /// Level of the style's GC hierarchy whose GCs become layered wisps (0 = coarsest). It
     /// must exist in `hierarchy.levels`, except the default 1, which means the finest level of
-    /// a one-level hierarchy. Default 1.
+    /// a one-level hierarchy. A level with more than `max_segments` segments is coarsened.
+    /// Default 1.
     #[serde(default = "d_level")]
     pub level: usize,
     /// Most wisp segments: when `level` has more (its GCs × (cross-sections − 1)), the next
