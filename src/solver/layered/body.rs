@@ -97,10 +97,22 @@ pub fn sliding_contact(
 ) -> u32 {
     let mut contacts = 0;
     for p in 0..w.point_count() {
-        if w.start[w.wisp_of[p] as usize] as usize == p {
+        if w.is_root[p] {
             continue;
         }
-        for b in balls {
+        // The balls near enough to any point of the section (none: the usual case).
+        let near = near_balls(w, p, balls, threshold);
+        if near == 0 {
+            continue;
+        }
+        let nearby = || {
+            balls
+                .iter()
+                .enumerate()
+                .filter(move |&(i, _)| is_near(near, i))
+                .map(|(_, b)| b)
+        };
+        for b in nearby() {
             let r = w.pos[p] - b.center;
             let dist = r.norm();
             if dist - b.radius < threshold && dist > 1e-12 {
@@ -113,7 +125,7 @@ pub fn sliding_contact(
         }
         for j in 0..ENV {
             let x = w.env_pos(p, j);
-            for b in balls {
+            for b in nearby() {
                 let r = x - b.center;
                 let dist = r.norm();
                 if dist - b.radius < threshold && dist > 1e-12 {
@@ -130,14 +142,62 @@ pub fn sliding_contact(
     contacts
 }
 
+/// Bit `i` set when ball `i` may be within `threshold` of section `p`'s skeleton point or one
+/// of its envelope points (a conservative test on the skeleton point alone: an envelope point
+/// is no farther from it than the section's largest radius). At most 64 balls are culled;
+/// beyond, every ball counts as near.
+#[inline]
+fn is_near(near: u64, i: usize) -> bool {
+    i >= 64 || near & (1 << i) != 0
+}
+
+fn near_balls(w: &Wisps, p: usize, balls: &[Ball], threshold: f64) -> u64 {
+    if balls.len() > 64 {
+        return u64::MAX;
+    }
+    let reach = w.rho[p * ENV..p * ENV + ENV]
+        .iter()
+        .fold(0.0f64, |m, &r| m.max(r));
+    let mut near = 0u64;
+    for (i, b) in balls.iter().enumerate() {
+        let lim = (b.radius + threshold.max(0.0) + reach) * (1.0 + 1e-9) + 1e-12;
+        if (w.pos[p] - b.center).norm_squared() <= lim * lim {
+            near |= 1 << i;
+        }
+    }
+    near
+}
+
 /// §4.3.2, root to tip: a skeleton point inside a ball moves out (keeping its spring's length)
 /// and the rest of the wisp moves with it; then its envelope points inside a ball move along
 /// their half-lines to the surface and lose their approaching radial velocity. Needs frames of
 /// the current positions; returns the points moved.
 pub fn penetration_reaction(w: &mut Wisps, balls: &[Ball], pose: &Pose, margin: f64) -> u32 {
+    reaction(w, balls, pose, margin, false)
+}
+
+/// [`penetration_reaction`] on wisps whose frames may be stale: a wisp with a section near a
+/// ball gets the frames of its current positions first; the others cannot touch a ball and
+/// are left as they are (their frames too).
+pub fn penetration_reaction_framing(
+    w: &mut Wisps,
+    balls: &[Ball],
+    pose: &Pose,
+    margin: f64,
+) -> u32 {
+    reaction(w, balls, pose, margin, true)
+}
+
+fn reaction(w: &mut Wisps, balls: &[Ball], pose: &Pose, margin: f64, framing: bool) -> u32 {
     let mut moved = 0;
     for wi in 0..w.len() {
         let r = w.points(wi);
+        if framing {
+            if (r.start + 1..r.end).all(|p| near_balls(w, p, balls, 0.0) == 0) {
+                continue;
+            }
+            w.compute_wisp_frames(wi, pose);
+        }
         let moved_before = moved;
         for p in r.start + 1..r.end {
             let before = w.pos[p];
@@ -176,10 +236,14 @@ pub fn penetration_reaction(w: &mut Wisps, balls: &[Ball], pose: &Pose, margin: 
             w.compute_wisp_frames(wi, pose);
         }
         for p in r.start + 1..r.end {
+            let near = near_balls(w, p, balls, 0.0);
+            if near == 0 {
+                continue;
+            }
             for j in 0..ENV {
                 let dir = w.env_dir(p, j);
                 let e = p * ENV + j;
-                for b in balls {
+                for (_, b) in balls.iter().enumerate().filter(|&(i, _)| is_near(near, i)) {
                     let x = w.env_pos(p, j);
                     if (x - b.center).norm_squared() >= b.radius * b.radius {
                         continue;

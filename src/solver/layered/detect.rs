@@ -40,6 +40,15 @@ pub struct PairContacts {
     pub end: u32,
 }
 
+/// A segment's axis as the point test needs it, computed once per detection.
+#[derive(Debug, Clone, Copy, Default)]
+struct SegAxis {
+    ab: Vector3<f64>,
+    l2: f64,
+    /// A bound on the squared distance from the axis of any point inside the volume.
+    reach2: f64,
+}
+
 /// The grid, the mailbox and the contact lists, kept between detections.
 #[derive(Debug, Clone, Default)]
 pub struct Detector {
@@ -53,6 +62,11 @@ pub struct Detector {
     items: Vec<u32>,
     /// Per segment: the last segment it was tested with (the mailbox of §4.1).
     mailbox: Vec<u32>,
+    /// Per skeleton point: its section's 4 envelope points in world space, this detection.
+    env: Vec<[Vector3<f64>; ENV]>,
+    /// Per segment: its axis `b − a`, its squared length and the square of a radius no point
+    /// of its volume is farther than from the axis (with a margin for rounding).
+    axis: Vec<SegAxis>,
     /// This detection's pairs in contact.
     pub pairs: Vec<PairContacts>,
     /// This detection's contacts, grouped by pair.
@@ -77,6 +91,8 @@ impl Detector {
         d.cell_lo = vec![[0; 3]; n];
         d.cell_hi = vec![[0; 3]; n];
         d.mailbox = vec![u32::MAX; n];
+        d.env = vec![[Vector3::zeros(); ENV]; w.point_count()];
+        d.axis = vec![SegAxis::default(); n];
         d.items.reserve(n * 8);
         d.cell_start.reserve(MAX_CELLS + 1);
         d.pairs.reserve(n * 8);
@@ -90,6 +106,8 @@ impl Detector {
             + (self.lo.capacity() + self.hi.capacity()) * 24
             + (self.cell_lo.capacity() + self.cell_hi.capacity()) * 12
             + (self.cell_start.capacity() + self.items.capacity() + self.mailbox.capacity()) * 4
+            + self.env.capacity() * std::mem::size_of::<[Vector3<f64>; ENV]>()
+            + self.axis.capacity() * std::mem::size_of::<SegAxis>()
             + self.pairs.capacity() * std::mem::size_of::<PairContacts>()
             + self.contacts.capacity() * std::mem::size_of::<Contact>()
     }
@@ -108,20 +126,34 @@ impl Detector {
             Vector3::repeat(f64::NEG_INFINITY),
         );
         let mut size = 0.0;
+        for (p, env) in self.env.iter_mut().enumerate() {
+            for (j, e) in env.iter_mut().enumerate() {
+                *e = w.env_pos(p, j);
+            }
+        }
         for i in 0..n {
             let p = self.segs[i] as usize;
             let (mut lo, mut hi) = (w.pos[p], w.pos[p]);
             for q in [p, p + 1] {
                 lo = lo.inf(&w.pos[q]);
                 hi = hi.sup(&w.pos[q]);
-                for j in 0..ENV {
-                    let e = w.env_pos(q, j);
-                    lo = lo.inf(&e);
-                    hi = hi.sup(&e);
+                for e in &self.env[q] {
+                    lo = lo.inf(e);
+                    hi = hi.sup(e);
                 }
             }
             self.lo[i] = lo;
             self.hi[i] = hi;
+            let ab = w.pos[p + 1] - w.pos[p];
+            let reach = w.rho[p * ENV..p * ENV + 2 * ENV]
+                .iter()
+                .fold(0.0f64, |m, &r| m.max(r))
+                * (1.0 + 1e-9);
+            self.axis[i] = SegAxis {
+                ab,
+                l2: ab.norm_squared(),
+                reach2: reach * reach,
+            };
             glo = glo.inf(&lo);
             ghi = ghi.sup(&hi);
             size += (hi - lo).max();
@@ -203,15 +235,19 @@ impl Detector {
         }
         self.pairs_tested += 1;
         let first = self.contacts.len() as u32;
-        for (own, other) in [(pa, pb), (pb, pa)] {
+        for (own, other, oi) in [(pa, pb, j), (pb, pa, i)] {
             let q = own + 1;
+            let ax = self.axis[oi];
+            if !section_may_enter(w, q, other, &ax) {
+                continue;
+            }
             for which in 0..=ENV {
                 let x = if which == ENV {
                     w.pos[q]
                 } else {
-                    w.env_pos(q, which)
+                    self.env[q][which]
                 };
-                if let Some(s) = inside_segment(w, other, &x) {
+                if let Some(s) = inside_axis(w, other, &ax, &x) {
                     self.contacts.push(Contact {
                         point: q as u32,
                         which: which as u8,
@@ -254,12 +290,55 @@ pub fn inside_segment(w: &Wisps, p: usize, x: &Vector3<f64>) -> Option<f64> {
     (d < radius).then_some(s)
 }
 
+/// Whether any of the 5 points of section `q` (within its largest radius of its skeleton
+/// point) can be inside segment `p`'s volume: its skeleton point is within the two reaches of
+/// the segment's axis. A conservative bound, with a margin for rounding.
+#[inline]
+fn section_may_enter(w: &Wisps, q: usize, p: usize, ax: &SegAxis) -> bool {
+    let x = w.pos[q];
+    let a = w.pos[p];
+    let s = if ax.l2 > 0.0 {
+        ((x - a).dot(&ax.ab) / ax.l2).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    let d2 = (x - (a + ax.ab * s)).norm_squared();
+    let own = w.rho[q * ENV..q * ENV + ENV]
+        .iter()
+        .fold(0.0f64, |m, &r| m.max(r))
+        * (1.0 + 1e-9);
+    let lim = ax.reach2.sqrt() + own + 1e-12;
+    d2 <= lim * lim
+}
+
+/// [`inside_segment`] with the segment's axis computed once: the same arithmetic, and a point
+/// farther from the axis than every envelope point of the two sections is out at once (the
+/// ellipse quadrants never reach beyond their envelope points).
+#[inline]
+fn inside_axis(w: &Wisps, p: usize, ax: &SegAxis, x: &Vector3<f64>) -> Option<f64> {
+    let (a, b) = (w.pos[p], w.pos[p + 1]);
+    if (x - a).dot(&w.t[p]) < 0.0 || (x - b).dot(&w.t[p + 1]) > 0.0 {
+        return None;
+    }
+    let s = if ax.l2 > 0.0 {
+        ((x - a).dot(&ax.ab) / ax.l2).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    let r = x - (a + ax.ab * s);
+    let d2 = r.norm_squared();
+    if d2 >= ax.reach2 {
+        return None;
+    }
+    let d = d2.sqrt();
+    let radius = (1.0 - s) * section_radius(w, p, &r) + s * section_radius(w, p + 1, &r);
+    (d < radius).then_some(s)
+}
+
 /// Radius of section `p` in the direction of `r` (projected on the section plane): the ellipse
 /// quadrant through the two envelope points around that direction.
 pub fn section_radius(w: &Wisps, p: usize, r: &Vector3<f64>) -> f64 {
-    let u = w.u[p];
-    let v = w.t[p].cross(&u);
-    let (x, y) = (r.dot(&u), r.dot(&v));
+    let (x, y) = (r.dot(&w.u[p]), r.dot(&w.v[p]));
     let h = (x * x + y * y).sqrt();
     let rho = &w.rho[p * ENV..p * ENV + ENV];
     let rx = if x >= 0.0 { rho[0] } else { rho[2] };

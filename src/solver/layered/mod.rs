@@ -72,9 +72,11 @@ pub struct LayeredSolver {
     /// The `layered:` section in force.
     pub layered: LayeredParams,
     coeffs: Coeffs,
+    shares: forces::Shares,
     /// The wisps' state.
     pub wisps: Wisps,
     detector: Detector,
+    section_cache: response::SectionCache,
     balls: Vec<Ball>,
     strand_map: StrandMap,
     level: usize,
@@ -92,7 +94,7 @@ impl LayeredSolver {
     /// `params.settle` seconds in the starting pose.
     pub fn new(model: Arc<HairModel>, motion: Motion, params: &SimParams, style: &Style) -> Self {
         let lp = style.layered.clone();
-        let level = lp.level.min(model.level_count() - 1);
+        let level = wisp_level(&model, &lp);
         let wisps = Wisps::build(&model, level);
         let strand_map = StrandMap::build(&model, &wisps, level, lp.jitter);
         let dt = 1.0 / lp.rate;
@@ -101,9 +103,12 @@ impl LayeredSolver {
         let stiffness = lp
             .stiffness
             .unwrap_or_else(|| params::default_stiffness(&style.link));
+        let coeffs = coeffs(params, &lp, stiffness);
         let mut s = LayeredSolver {
+            shares: forces::Shares::new(&wisps, &coeffs, dt),
             detector: Detector::new(&wisps),
-            coeffs: coeffs(params, &lp, stiffness),
+            section_cache: response::SectionCache::new(&wisps),
+            coeffs,
             pose: motion.pose(0.0),
             body_every: every(lp.body_rate),
             interaction_every: every(lp.interaction_rate),
@@ -145,13 +150,19 @@ impl LayeredSolver {
 
     /// Kinetic energy of the skeleton and envelope points, J.
     pub fn kinetic_energy(&self) -> f64 {
+        // An envelope point moves at its skeleton point's velocity plus its radial rate along
+        // ±u or ±v: over the 4 of a section, |v_e|² sums to 4|v|² + 2(v·u)(ρ̇₀ − ρ̇₂)
+        // + 2(v·v̂)(ρ̇₁ − ρ̇₃) + Σρ̇².
         let w = &self.wisps;
         let mut e = 0.0;
         for p in 0..w.point_count() {
-            e += 0.5 * w.mass[p] * w.vel[p].norm_squared();
-            for j in 0..ENV {
-                e += 0.5 * self.layered.envelope_mass * w.mass[p] * w.env_vel(p, j).norm_squared();
-            }
+            let v = w.vel[p];
+            let r = &w.rho_rate[p * ENV..p * ENV + ENV];
+            let v2 = v.norm_squared();
+            let env = 4.0 * v2
+                + 2.0 * (v.dot(&w.u[p]) * (r[0] - r[2]) + v.dot(&w.v[p]) * (r[1] - r[3]))
+                + r.iter().map(|x| x * x).sum::<f64>();
+            e += 0.5 * w.mass[p] * (v2 + self.layered.envelope_mass * env);
         }
         e
     }
@@ -177,6 +188,17 @@ impl LayeredSolver {
         w.pose_roots(&self.pose);
         w.compute_frames(&self.pose);
     }
+}
+
+/// The level whose GCs become wisps: `layered.level`, coarsened while it has more than
+/// `layered.max_segments` segments.
+pub fn wisp_level(model: &HairModel, lp: &LayeredParams) -> usize {
+    let mut level = lp.level.min(model.level_count() - 1);
+    let segments = |l: usize| model.levels[l].gc_count() * model.k.saturating_sub(1);
+    while level > 0 && lp.max_segments > 0 && segments(level) > lp.max_segments {
+        level -= 1;
+    }
+    level
 }
 
 fn coeffs(p: &SimParams, lp: &LayeredParams, stiffness: f64) -> Coeffs {
@@ -227,6 +249,7 @@ impl Solver for LayeredSolver {
     fn set_params(&mut self, params: &SimParams) {
         self.params = params.clone();
         self.coeffs = coeffs(params, &self.layered, self.coeffs.stiffness);
+        self.shares.update(&self.wisps, &self.coeffs, self.dt);
     }
 
     fn ignored_params(&self) -> &'static [&'static str] {
@@ -263,7 +286,7 @@ impl Solver for LayeredSolver {
             self.detector.detect(w);
         }
         // 3. Velocities, then velocity modifications.
-        forces::integrate_velocities(w, &self.coeffs, dt);
+        forces::integrate_velocities(w, &self.coeffs, &self.shares, dt);
         let mut counts = response::PairCounts::default();
         if interact {
             let pp = response::PairParams {
@@ -273,7 +296,13 @@ impl Solver for LayeredSolver {
                 envelope_mass: lp.envelope_mass,
                 dt_c: dt * self.interaction_every as f64,
             };
-            counts = response::respond(w, &self.detector.pairs, &self.detector.contacts, &pp);
+            counts = response::respond(
+                w,
+                &self.detector.pairs,
+                &self.detector.contacts,
+                &pp,
+                &mut self.section_cache,
+            );
         }
         let mut body_contacts = 0;
         if body_step {
@@ -285,11 +314,11 @@ impl Solver for LayeredSolver {
         // 4. Positions, then position modifications.
         forces::integrate_positions(w, dt);
         if body_step {
-            // The reaction moves envelope points along their half-lines in the new sections
-            // (the next step's forces and `sync_display` recompute the frames anyway).
-            w.compute_frames(&self.pose);
+            // The reaction moves envelope points along their half-lines in the new sections:
+            // those of the wisps near the body are computed (the next step's forces and
+            // `sync_display` recompute every frame anyway).
             let margin = 0.9 * lp.body_threshold;
-            body::penetration_reaction(w, &self.balls, &self.pose, margin);
+            body::penetration_reaction_framing(w, &self.balls, &self.pose, margin);
         }
         self.time = t_new;
         self.steps += 1;
@@ -380,7 +409,7 @@ impl Solver for LayeredSolver {
     }
 
     fn reserved_bytes(&self) -> usize {
-        self.detector.capacity_bytes()
+        self.detector.capacity_bytes() + self.section_cache.capacity_bytes()
     }
 }
 

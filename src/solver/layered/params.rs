@@ -11,9 +11,17 @@ use serde::{Deserialize, Serialize};
 pub struct LayeredParams {
     /// Level of the style's GC hierarchy whose GCs become layered wisps (0 = coarsest). It
     /// must exist in `hierarchy.levels`, except the default 1, which means the finest level of
-    /// a one-level hierarchy. Default 1.
+    /// a one-level hierarchy. A level with more than `max_segments` segments is coarsened.
+    /// Default 1.
     #[serde(default = "d_level")]
     pub level: usize,
+    /// Most wisp segments: when `level` has more (its GCs × (cross-sections − 1)), the next
+    /// coarser level is taken, and so on (level 0 whatever its count). §4.1: the cost of the
+    /// model is its segments; §7.2: the paper's styles have 796, 723 and 431 (199 wisps × 4.0
+    /// segments, 73 × 9.9, 56 × 7.7). The finest level of a built-in short style has about
+    /// 4600. 0: no limit. Default 1000.
+    #[serde(default = "d_max_segments")]
+    pub max_segments: usize,
     /// Integration rate, Hz (§7.2: 1000). Default 1000.
     #[serde(default = "d_rate")]
     pub rate: f64,
@@ -86,6 +94,7 @@ impl Default for LayeredParams {
     fn default() -> Self {
         LayeredParams {
             level: d_level(),
+            max_segments: d_max_segments(),
             rate: d_rate(),
             body_rate: d_body_rate(),
             interaction_rate: d_interaction_rate(),
@@ -110,6 +119,9 @@ impl Default for LayeredParams {
 
 fn d_level() -> usize {
     1
+}
+fn d_max_segments() -> usize {
+    1000
 }
 fn d_rate() -> f64 {
     1000.0

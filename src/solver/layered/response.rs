@@ -148,6 +148,50 @@ fn section_extent(w: &Wisps, p: usize) -> f64 {
         .fold(0.0f64, |a, &b| a.max(b))
 }
 
+/// What the response reads of every section and segment, computed once per interaction step
+/// (positions and radii do not change while the pairs respond, only velocities).
+#[derive(Debug, Clone, Default)]
+pub struct SectionCache {
+    /// Per skeleton point `p`: the unit direction of segment `p → p + 1` (the tip: its `t`).
+    dir: Vec<Vector3<f64>>,
+    /// Per skeleton point: the largest envelope radius of its section.
+    extent: Vec<f64>,
+    /// Per skeleton point: its section's relative density.
+    density: Vec<f64>,
+    /// Per skeleton point: 1 / mass, 0 for a root (the head moves it).
+    inv_mass: Vec<f64>,
+}
+
+impl SectionCache {
+    /// Buffers for `w`'s points.
+    pub fn new(w: &Wisps) -> SectionCache {
+        let n = w.point_count();
+        SectionCache {
+            dir: vec![Vector3::zeros(); n],
+            extent: vec![0.0; n],
+            density: vec![0.0; n],
+            inv_mass: vec![0.0; n],
+        }
+    }
+
+    /// Bytes held.
+    pub fn capacity_bytes(&self) -> usize {
+        self.dir.capacity() * 24
+            + (self.extent.capacity() + self.density.capacity() + self.inv_mass.capacity()) * 8
+    }
+
+    fn fill(&mut self, w: &Wisps) {
+        let n = w.point_count();
+        for p in 0..n {
+            let tip = p + 1 == n || w.is_root[p + 1];
+            self.dir[p] = if tip { w.t[p] } else { seg_dir(w, p) };
+            self.extent[p] = section_extent(w, p);
+            self.density[p] = density(w, p);
+            self.inv_mass[p] = inv_mass(w, p);
+        }
+    }
+}
+
 /// §4.2: classifies each pair in contact (same plane and relative velocity within the angle:
 /// interpenetration; else collision) and applies its response to each of its contacts, in
 /// detection order (each contact sees the velocities the previous ones left).
@@ -156,11 +200,17 @@ pub fn respond(
     pairs: &[PairContacts],
     contacts: &[Contact],
     pp: &PairParams,
+    cache: &mut SectionCache,
 ) -> PairCounts {
     let mut counts = PairCounts::default();
+    if pairs.is_empty() {
+        return counts;
+    }
+    cache.fill(w);
+    let cache = &*cache;
     for pair in pairs {
         let (a, b) = (pair.a as usize, pair.b as usize);
-        let (sa, sb) = (seg_dir(w, a), seg_dir(w, b));
+        let (sa, sb) = (cache.dir[a], cache.dir[b]);
         let (ma, mb) = (
             (w.pos[a] + w.pos[a + 1]) * 0.5,
             (w.pos[b] + w.pos[b + 1]) * 0.5,
@@ -170,8 +220,8 @@ pub fn respond(
         let (n, _) = plane_normal(&sa, &sb, &sep);
         // "Are the two skeletons in one plane": their offset out of it is within their
         // thicknesses (always nearly so for segments in contact).
-        let thick = section_extent(w, a + 1).max(section_extent(w, a))
-            + section_extent(w, b + 1).max(section_extent(w, b));
+        let ext = &cache.extent;
+        let thick = ext[a + 1].max(ext[a]) + ext[b + 1].max(ext[b]);
         let coplanar = (ma - mb).dot(&n).abs() <= thick;
         let inter = !pp.collisions || (coplanar && interpenetrates(&v_rel, &n, pp.sin_threshold));
         if inter {
@@ -180,10 +230,10 @@ pub fn respond(
             counts.collisions += 1;
         }
         for c in &contacts[pair.first as usize..pair.end as usize] {
-            respond_contact(w, c, inter, pp);
+            respond_contact(w, c, inter, pp, cache);
         }
         if !inter {
-            collide_segments(w, a, b);
+            collide_segments(w, a, b, &cache.inv_mass);
         }
     }
     counts
@@ -191,8 +241,8 @@ pub fn respond(
 
 /// Mass of a segment's two skeleton points (a kinematic root counts as immovable) and their
 /// mass-weighted velocity.
-fn segment_momentum(w: &Wisps, p: usize) -> (f64, Vector3<f64>) {
-    let (ia, ib) = (inv_mass(w, p), inv_mass(w, p + 1));
+fn segment_momentum(w: &Wisps, p: usize, inv: &[f64]) -> (f64, Vector3<f64>) {
+    let (ia, ib) = (inv[p], inv[p + 1]);
     if ia == 0.0 || ib == 0.0 {
         let v = if ia == 0.0 { w.vel[p] } else { w.vel[p + 1] };
         return (super::forces::KINEMATIC_MASS, v);
@@ -204,21 +254,21 @@ fn segment_momentum(w: &Wisps, p: usize) -> (f64, Vector3<f64>) {
 /// §4.2.2 "we simply eliminate the relative velocities of the point-masses located in the
 /// contact area": besides the contact points, the two colliding segments' skeletons take the
 /// mass-weighted average of their velocities (each segment keeps its internal motion).
-fn collide_segments(w: &mut Wisps, a: usize, b: usize) {
-    let (ma, va) = segment_momentum(w, a);
-    let (mb, vb) = segment_momentum(w, b);
+fn collide_segments(w: &mut Wisps, a: usize, b: usize, inv: &[f64]) {
+    let (ma, va) = segment_momentum(w, a, inv);
+    let (mb, vb) = segment_momentum(w, b, inv);
     let j = collision_impulse(&va, ma, &vb, mb);
     for (p, m, sign) in [(a, ma, 1.0), (b, mb, -1.0)] {
         let dv = j * (sign / m);
         for q in [p, p + 1] {
-            if inv_mass(w, q) > 0.0 {
+            if inv[q] > 0.0 {
                 w.vel[q] += dv;
             }
         }
     }
 }
 
-fn respond_contact(w: &mut Wisps, c: &Contact, inter: bool, pp: &PairParams) {
+fn respond_contact(w: &mut Wisps, c: &Contact, inter: bool, pp: &PairParams, cache: &SectionCache) {
     let q = c.point as usize;
     let own = q - 1;
     let seg = c.seg as usize;
@@ -249,7 +299,7 @@ fn respond_contact(w: &mut Wisps, c: &Contact, inter: bool, pp: &PairParams) {
     } else {
         (w.pos[q], w.vel[q], w.mass[q], Vector3::zeros())
     };
-    let (ia, ib) = (inv_mass(w, seg), inv_mass(w, seg + 1));
+    let (ia, ib) = (cache.inv_mass[seg], cache.inv_mass[seg + 1]);
     let denom = (1.0 - s).powi(2) * ia + s * s * ib;
     let ms = if denom > 0.0 {
         1.0 / denom
@@ -258,10 +308,10 @@ fn respond_contact(w: &mut Wisps, c: &Contact, inter: bool, pp: &PairParams) {
     };
     let vs = w.vel[seg] * (1.0 - s) + w.vel[seg + 1] * s;
     let axis = w.pos[seg] * (1.0 - s) + w.pos[seg + 1] * s;
-    let (n, _) = plane_normal(&seg_dir(w, own), &seg_dir(w, seg), &(xp - axis));
+    let (n, _) = plane_normal(&cache.dir[own], &cache.dir[seg], &(xp - axis));
     let j = if inter {
         let j1 = interpenetration_impulse(&vp, mp, &vs, ms, &n);
-        let nu = pp.viscosity * density(w, if s < 0.5 { seg } else { seg + 1 });
+        let nu = pp.viscosity * cache.density[if s < 0.5 { seg } else { seg + 1 }];
         let (vp1, vs1) = (vp + j1 / mp, vs - j1 / ms);
         j1 + drag_impulse(&vp1, mp, &vs1, ms, &n, nu, pp.dt_c)
     } else {

@@ -58,6 +58,17 @@ pub struct Wisps {
     pub t: Vec<Vector3<f64>>,
     /// Per skeleton point: the section frame's first axis (`v = t × u`).
     pub u: Vec<Vector3<f64>>,
+    /// Per skeleton point: the section frame's second axis `t × u`, kept with the frame by
+    /// [`Wisps::compute_frames`] (so the envelope's half-lines cost no cross product).
+    pub v: Vec<Vector3<f64>>,
+    /// Per skeleton point `p`: the length of segment `p → p + 1` (0 at the tip), m, and its
+    /// direction (`seg_dir`, the segment over its length when that is not 0), as
+    /// [`Wisps::compute_frames`] last found them.
+    pub seg_len: Vec<f64>,
+    /// See `seg_len`.
+    pub seg_dir: Vec<Vector3<f64>>,
+    /// Per skeleton point: the root of its wisp (moved by the head, not simulated).
+    pub is_root: Vec<bool>,
     /// Per envelope point: distance from the skeleton point along its half-line, m.
     pub rho: Vec<f64>,
     /// Per envelope point: rate of `rho`, m/s.
@@ -66,6 +77,9 @@ pub struct Wisps {
     pub rho_rest: Vec<f64>,
     /// Per envelope point: force along its half-line, N.
     pub rho_force: Vec<f64>,
+    /// Per envelope point `j`: the rest length of the ring spring to point `j + 1` of the same
+    /// section, `sqrt(rho_rest[j]² + rho_rest[j + 1]²)`, m.
+    pub ring_rest: Vec<f64>,
 }
 
 impl Wisps {
@@ -115,6 +129,14 @@ impl Wisps {
         w.rest_dir = vec![Vector3::x(); n];
         w.t = vec![Vector3::y(); n];
         w.u = vec![Vector3::x(); n];
+        w.v = vec![Vector3::z(); n];
+        w.seg_len = vec![0.0; n];
+        w.seg_dir = vec![Vector3::zeros(); n];
+        w.is_root = vec![false; n];
+        for wi in 0..w.len() {
+            let first = w.start[wi] as usize;
+            w.is_root[first] = true;
+        }
         for wi in 0..w.len() {
             let r = w.points(wi);
             for p in r.start..r.end - 1 {
@@ -147,7 +169,7 @@ impl Wisps {
             let wi = w.wisp_of[p] as usize;
             if p + 1 < w.start[wi + 1] as usize {
                 let s = (w.rest_pos[p + 1] - w.rest_pos[p]) / w.rest_len[p].max(1e-12);
-                let v = w.t[p].cross(&w.u[p]);
+                let v = w.v[p];
                 w.rest_dir[p] = Vector3::new(s.dot(&w.t[p]), s.dot(&w.u[p]), s.dot(&v));
             }
         }
@@ -193,6 +215,13 @@ impl Wisps {
         for (p, f) in widen.iter().enumerate() {
             rho[p * ENV..p * ENV + ENV].iter_mut().for_each(|r| *r *= f);
         }
+        w.ring_rest = (0..n * ENV)
+            .map(|e| {
+                let (p, j) = (e / ENV, e % ENV);
+                let k = p * ENV + (j + 1) % ENV;
+                (rho[e].powi(2) + rho[k].powi(2)).sqrt()
+            })
+            .collect();
         w.rho_rest = rho.clone();
         w.rho = rho;
         w.rho_rate = vec![0.0; n * ENV];
@@ -203,13 +232,19 @@ impl Wisps {
     /// World direction of envelope half-line `j` of skeleton point `p` (+u, +v, −u, −v).
     #[inline]
     pub fn env_dir(&self, p: usize, j: usize) -> Vector3<f64> {
-        let u = self.u[p];
         match j {
-            0 => u,
-            1 => self.t[p].cross(&u),
-            2 => -u,
-            _ => -self.t[p].cross(&u),
+            0 => self.u[p],
+            1 => self.v[p],
+            2 => -self.u[p],
+            _ => -self.v[p],
         }
+    }
+
+    /// The 4 half-line directions of section `p` (+u, +v, −u, −v).
+    #[inline]
+    pub fn env_dirs(&self, p: usize) -> [Vector3<f64>; ENV] {
+        let (u, v) = (self.u[p], self.v[p]);
+        [u, v, -u, -v]
     }
 
     /// World position of envelope point `j` of skeleton point `p`.
@@ -258,9 +293,13 @@ impl Wisps {
         let mut t_prev = pose.transform_vector(&self.t0_rest[wi]);
         for p in r.clone() {
             let t = if p + 1 < r.end {
-                let d = (self.pos[p + 1] - self.pos[p])
-                    .try_normalize(1e-12)
-                    .unwrap_or(d_prev);
+                let s = self.pos[p + 1] - self.pos[p];
+                let len = s.norm();
+                if len > 0.0 {
+                    self.seg_dir[p] = s / len;
+                }
+                self.seg_len[p] = len;
+                let d = if len > 1e-12 { self.seg_dir[p] } else { d_prev };
                 let t = bisector(&d_prev, &d);
                 d_prev = d;
                 t
@@ -273,6 +312,7 @@ impl Wisps {
                 .unwrap_or_else(|| any_perpendicular(&t));
             self.t[p] = t;
             self.u[p] = u;
+            self.v[p] = t.cross(&u);
             t_prev = t;
             u_prev = u;
         }
