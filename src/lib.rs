@@ -20,6 +20,7 @@
 //! motion      head and body motion
 //! model       the multiresolution GC hierarchy, built once from a style
 //! style       the RON schema, validation, generation and import
+//! simd        processor-specific code (intrinsics), each operation with a portable twin
 //! error       user errors and exit codes
 //! ```
 //!
@@ -37,6 +38,7 @@ pub mod pipeline;
 pub mod render;
 pub mod report;
 pub mod scene;
+pub mod simd;
 pub mod solver;
 pub mod stream;
 pub mod style;

@@ -72,6 +72,7 @@
 
 use std::sync::{Mutex, RwLock};
 
+mod batch;
 mod body;
 mod collider;
 mod grid;
@@ -80,6 +81,7 @@ mod reference;
 mod response;
 mod worker;
 
+use batch::*;
 pub use body::*;
 pub use collider::*;
 pub use grid::*;
