@@ -18,6 +18,9 @@
 //!
 //! This module uses nothing of wisptree's: solvers and renderers call it, with plain arrays.
 
+pub mod blend;
+pub mod cull;
+pub mod dispatch;
 pub mod lanes;
 pub mod pairs;
 
