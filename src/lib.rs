@@ -34,6 +34,7 @@ pub mod experiment;
 pub mod frame;
 pub mod model;
 pub mod motion;
+pub mod par;
 pub mod pipeline;
 pub mod render;
 pub mod report;
