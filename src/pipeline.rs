@@ -246,6 +246,7 @@ pub fn fill_stats(frame: &mut Frame, params: &crate::style::SimParams) {
     };
     push(p::STEP_MS, frame.step_ms);
     push(p::DROPPED_FRAMES, frame.dropped_frames as f64);
+    push(p::REALTIME_FACTOR, frame.realtime_factor);
     push(p::SPLIT_THRESHOLD, params.split_threshold);
     push(p::MERGE_VELOCITY, params.merge_velocity);
     push(p::FRICTION, params.friction);

@@ -214,11 +214,8 @@ fn bad_tfx_files_exit_2() {
 }
 
 #[test]
-fn ponytail_style_loads_when_the_data_is_there() {
-    if shared().is_none() {
-        eprintln!("skipping: ../shared is absent");
-        return;
-    }
+fn ponytail_style_loads_from_the_shared_data() {
+    shared::shared_path("data/tressfx/ponytail");
     let p = root().join("styles/ponytail.ron");
     let (code, out, err) = wisptree(&["inspect", p.to_str().unwrap(), "--json"]);
     assert_eq!(code, 0, "{err}");
@@ -281,4 +278,156 @@ fn bench_with_a_missing_model_exits_2() {
     let (code, _, err) = wisptree(&["bench", "--models", "no/such/style.ron", "--quick"]);
     assert_eq!(code, 2, "{err}");
     assert!(err.contains("no/such/style.ron"), "{err}");
+}
+
+// What a new user tripped on (issue 26, "Also").
+
+#[test]
+fn a_negative_number_gets_the_options_own_check_not_an_unexpected_argument() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    let out = out.to_str().unwrap();
+    for (args, needle) in [
+        (
+            vec!["--seconds", "-1"],
+            "expected a positive number of simulated seconds",
+        ),
+        (
+            vec!["run", "--seconds", "-1"],
+            "expected a positive number of simulated seconds",
+        ),
+        (
+            vec!["render", "--seconds", "-1", "--out", out],
+            "expected a positive number of simulated seconds",
+        ),
+        (
+            vec!["export", "--seconds", "-1", "--out", out],
+            "expected a positive number of simulated seconds",
+        ),
+        (
+            vec!["sweep", "--seconds", "-1"],
+            "expected a positive number of simulated seconds",
+        ),
+        (
+            vec!["bench", "--seconds", "-1"],
+            "--seconds must be a positive number",
+        ),
+        (vec!["--strands", "-5"], "at least one strand"),
+        (vec!["run", "--strands", "-5"], "at least one strand"),
+        (vec!["sweep", "--strands", "-5"], "at least one strand"),
+        (vec!["sweep", "--jobs", "-2"], "-2"),
+    ] {
+        let (code, _, err) = wisptree(&args);
+        assert_eq!(code, 2, "{args:?}: {err}");
+        assert!(!err.contains("unexpected argument"), "{args:?}: {err}");
+        assert!(err.contains(needle), "{args:?}: {err}");
+    }
+}
+
+#[test]
+fn a_motion_file_that_is_not_utf8_says_so_once() {
+    let dir = tempfile::tempdir().unwrap();
+    let motion = dir.path().join("bad.ron");
+    std::fs::write(&motion, b"(keys: [\xff\xfe])").unwrap();
+    let rrd = dir.path().join("x.rrd");
+    let (code, _, err) = wisptree(&[
+        "run",
+        "--motion",
+        motion.to_str().unwrap(),
+        "--seconds",
+        "0.1",
+        "--save",
+        rrd.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("bad.ron"), "{err}");
+    assert_eq!(err.matches("valid UTF-8").count(), 1, "{err}");
+}
+
+#[test]
+fn a_huge_value_is_echoed_in_a_few_characters() {
+    let dir = tempfile::tempdir().unwrap();
+    // A motion file whose second key is at 1e308 s.
+    let motion = write(
+        dir.path(),
+        "m.ron",
+        "(keys: [(time: 0.0), (time: 1e308), (time: 1.0)])",
+    );
+    let rrd = dir.path().join("x.rrd");
+    let (code, _, err) = wisptree(&[
+        "run",
+        "--motion",
+        &motion,
+        "--seconds",
+        "0.1",
+        "--save",
+        rrd.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("1e308") && !err.contains("00000000"), "{err}");
+    // A style value.
+    let style = write(
+        dir.path(),
+        "s.ron",
+        &good_style().replace(
+            "sim: (total_mass: 0.5)",
+            "sim: (total_mass: 0.5, accel_smoothing: 1e308)",
+        ),
+    );
+    let (code, _, err) = wisptree(&["inspect", &style]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("accel_smoothing"), "{err}");
+    assert!(err.contains("1e308") && !err.contains("00000000"), "{err}");
+}
+
+/// The `[default: …]` of `--flag` in `wisptree CMD --help`, if it has one.
+fn help_default(cmd: &str, flag: &str) -> Option<String> {
+    let (code, out, err) = wisptree(&[cmd, "--help"]);
+    assert_eq!(code, 0, "{err}");
+    // The flag's entry: its line and the lines of its description, up to the next flag.
+    let mut lines = out
+        .lines()
+        .skip_while(|l| !l.trim_start().starts_with(&format!("{flag} <")));
+    let first = lines.next()?;
+    let entry: Vec<&str> = std::iter::once(first)
+        .chain(lines.take_while(|l| !l.trim_start().starts_with('-')))
+        .collect();
+    let entry = entry.join(" ");
+    let (_, rest) = entry.split_once("[default: ")?;
+    Some(rest.split_once(']')?.0.to_owned())
+}
+
+#[test]
+fn export_has_the_defaults_of_render() {
+    for flag in ["--style", "--motion", "--seconds", "--model"] {
+        let render = help_default("render", flag);
+        assert!(render.is_some(), "render {flag} has a default");
+        assert_eq!(help_default("export", flag), render, "{flag}");
+    }
+    // Without --style and --seconds, export gets past the flags to its own checks.
+    let dir = tempfile::tempdir().unwrap();
+    let file = write(dir.path(), "not_a_folder", "");
+    let (code, _, err) = wisptree(&["export", "--out", &file]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("is not a folder"), "{err}");
+}
+
+#[test]
+fn experiment_help_shows_the_name_as_required_and_list_still_lists() {
+    let (code, out, err) = wisptree(&["experiment", "--help"]);
+    assert_eq!(code, 0, "{err}");
+    assert!(out.contains("<NAME>") && !out.contains("[NAME]"), "{out}");
+    let (code, _, err) = wisptree(&["experiment"]);
+    assert_eq!(code, 2);
+    assert!(err.contains("<NAME>"), "{err}");
+    let (code, out, err) = wisptree(&["experiment", "--list"]);
+    assert_eq!(code, 0, "{err}");
+    assert!(out.contains("plante-fig8"), "{out}");
+}
+
+#[test]
+fn sweep_help_gives_the_split_threshold_in_newton_metres_per_kilogram() {
+    let (code, out, err) = wisptree(&["sweep", "--help"]);
+    assert_eq!(code, 0, "{err}");
+    assert!(out.contains("N·m·kg⁻¹") && !out.contains("m²/s²"), "{out}");
 }

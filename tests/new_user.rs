@@ -6,6 +6,8 @@ use std::path::Path;
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
+use wisptree::stream::sink::VIEWER_PORT_ENV;
+
 const BIN: &str = env!("CARGO_BIN_EXE_wisptree");
 
 /// Runs the binary in `dir` with `PATH` set to `path`, killing it after `limit` (a hang is a
@@ -15,6 +17,8 @@ fn run_in(dir: &Path, path: &str, args: &[&str], limit: Duration) -> (i32, Strin
         .args(args)
         .current_dir(dir)
         .env("PATH", path)
+        // A viewer the user has open on Rerun's default port must not change what the run does.
+        .env(VIEWER_PORT_ENV, free_port().to_string())
         .stdin(Stdio::null())
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
@@ -41,6 +45,12 @@ fn run_in(dir: &Path, path: &str, args: &[&str], limit: Duration) -> (i32, Strin
         String::from_utf8_lossy(&out.stdout).into_owned(),
         String::from_utf8_lossy(&out.stderr).into_owned(),
     )
+}
+
+/// A port of 127.0.0.1 nothing listens on now (the system picks it; it is released at once).
+fn free_port() -> u16 {
+    let l = std::net::TcpListener::bind("127.0.0.1:0").expect("a free port");
+    l.local_addr().unwrap().port()
 }
 
 /// A PATH with the usual system folders but no `rerun`.
@@ -364,11 +374,7 @@ fn fake_rerun(dir: &Path, body: &str) -> String {
 
 #[test]
 fn a_viewer_that_dies_or_never_listens_falls_back_to_a_file() {
-    // Nothing may listen on the viewer's port for this test to mean anything.
-    if std::net::TcpStream::connect("127.0.0.1:9876").is_ok() {
-        eprintln!("a viewer is running on 9876; skipping");
-        return;
-    }
+    // Nothing listens on the viewer's port: `run_in` moves it to a free one.
     for (what, body, needle) in [
         (
             "exits at once",
@@ -394,4 +400,23 @@ fn a_viewer_that_dies_or_never_listens_falls_back_to_a_file() {
         );
         assert!(!err.contains("may be incomplete"), "{what}: {err}");
     }
+}
+
+#[test]
+fn the_spawned_viewer_is_asked_for_the_port_the_environment_gives() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = fake_rerun(dir.path(), "echo \"$@\" > args.txt; exit 1");
+    let (code, _, err) = run_in(
+        dir.path(),
+        &path,
+        &["run", "--style", "short", "--seconds", "0.1"],
+        Duration::from_secs(90),
+    );
+    assert_eq!(code, 0, "{err}");
+    let args = std::fs::read_to_string(dir.path().join("args.txt")).unwrap();
+    // `run_in` gives a free port, which is not Rerun's default one.
+    assert!(
+        args.contains("--port=") && !args.contains("--port=9876"),
+        "{args}"
+    );
 }

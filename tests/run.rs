@@ -4,21 +4,21 @@
 
 #[path = "common/rrd.rs"]
 mod rrd;
+#[path = "common/shared.rs"]
+mod shared;
 #[path = "common/tiny_style.rs"]
 mod tiny_style;
 
 use std::collections::BTreeMap;
-use std::io::BufReader;
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
 use tiny_style::tiny_style;
 
-use rerun::external::re_log_types::LogMsg;
 use rerun::log::Chunk;
-use rerun::{LineStrips3D, Points3D, Scalars, TextLog, TimelineName};
-use rrd::rows;
-use wisptree::app::tune::{self, StyleChange};
+use rerun::{LineStrips3D, Points3D, TextLog};
+use rrd::{decode_file, rows, scalars};
+use wisptree::app::reload::{self, StyleChange};
 use wisptree::app::{self as run, RunOptions, StopSignal};
 use wisptree::frame::Frame;
 use wisptree::report::{EventKind, StepReport};
@@ -55,40 +55,6 @@ fn load(style: &Path) -> Scene {
     Scene::load(&style.display().to_string(), MOTION, SolverKind::Awt).unwrap()
 }
 
-/// The recording's (non-blueprint) chunks, decoded from the file with the SDK's decoder.
-fn decode_file(path: &Path) -> Vec<Chunk> {
-    let file = std::fs::File::open(path).expect("the recording exists");
-    let mut chunks = Vec::new();
-    for msg in rerun::external::re_log_encoding::DecoderApp::decode_lazy(BufReader::new(file)) {
-        match msg.expect("every message decodes") {
-            LogMsg::ArrowMsg(store, arrow) if !store.is_blueprint() => {
-                chunks.push(Chunk::from_arrow_msg(&arrow).expect("chunk decodes"));
-            }
-            _ => {}
-        }
-    }
-    assert!(!chunks.is_empty(), "{}: no data", path.display());
-    chunks
-}
-
-/// `(frame, value)` of a scalar series.
-fn scalars(chunks: &[Chunk], path: &str) -> Vec<(i64, f64)> {
-    let path: rerun::EntityPath = path.into();
-    let timeline = TimelineName::from("frame");
-    let component = Scalars::descriptor_scalars().component;
-    let mut out = Vec::new();
-    for c in chunks.iter().filter(|c| *c.entity_path() == path) {
-        for ((t, _), v) in c
-            .iter_component_indices(timeline, component)
-            .zip(c.iter_component::<rerun::components::Scalar>(component))
-        {
-            out.push((t.as_i64(), v.as_slice()[0].0 .0));
-        }
-    }
-    out.sort_by_key(|a| a.0);
-    out
-}
-
 fn texts(chunks: &[Chunk], path: &str) -> Vec<String> {
     let path: rerun::EntityPath = path.into();
     let component = TextLog::descriptor_text().component;
@@ -101,16 +67,9 @@ fn texts(chunks: &[Chunk], path: &str) -> Vec<String> {
     out
 }
 
-/// Runs the real Rerun CLI's `rrd verify` on `path`, if the tool is installed here.
+/// Runs the real Rerun CLI's `rrd verify` on `path` (`../shared/tools/rerun-cli`).
 fn verify_with_cli(path: &Path) {
-    let tool = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/tools/rerun-cli");
-    if !tool.exists() {
-        eprintln!(
-            "skipping `rerun rrd verify`: {} is not installed",
-            tool.display()
-        );
-        return;
-    }
+    let tool = shared::rerun_cli();
     let out = std::process::Command::new(&tool)
         .args(["rrd", "verify"])
         .arg(path)
@@ -261,13 +220,13 @@ fn reloading_the_style_changes_the_split_threshold_of_the_next_steps_and_broken_
 
     // Unchanged text: nothing to do.
     assert!(matches!(
-        tune::reload(&style, &current),
+        reload::reload(&style, &current),
         StyleChange::Unchanged
     ));
 
     // A threshold so high nothing can split: a parameter change, applied in place.
     std::fs::write(&style, tiny_style("1.0e6")).unwrap();
-    let new = match tune::reload(&style, &current) {
+    let new = match reload::reload(&style, &current) {
         StyleChange::Params(l) => l,
         other => panic!("expected new parameters, got {other:?}"),
     };
@@ -299,12 +258,12 @@ fn reloading_the_style_changes_the_split_threshold_of_the_next_steps_and_broken_
     // Broken edits: a syntax error and an invalid value. Both are errors naming the file, and
     // the caller keeps its style.
     std::fs::write(&style, "Style(hair: ").unwrap();
-    match tune::reload(&style, &current) {
+    match reload::reload(&style, &current) {
         StyleChange::Invalid(e) => assert!(e.to_string().contains("tiny.ron"), "{e}"),
         other => panic!("expected an error, got {other:?}"),
     }
     std::fs::write(&style, tiny_style("-1.0")).unwrap();
-    match tune::reload(&style, &current) {
+    match reload::reload(&style, &current) {
         StyleChange::Invalid(e) => {
             assert!(e.to_string().contains("split_threshold"), "{e}")
         }
@@ -318,7 +277,7 @@ fn reloading_the_style_changes_the_split_threshold_of_the_next_steps_and_broken_
         tiny_style("0.2").replace("cross_sections: 8", "cross_sections: 6"),
     )
     .unwrap();
-    match tune::reload(&style, &current) {
+    match reload::reload(&style, &current) {
         StyleChange::Geometry(b) => assert_eq!(b.1.k, 6),
         other => panic!("expected a new model, got {other:?}"),
     }

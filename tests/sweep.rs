@@ -2,6 +2,8 @@
 //! recording (one subtree per configuration, the grid blueprint), runs equal to the same
 //! configuration run alone bit for bit, and parts that merge into one recording.
 
+#[path = "common/shared.rs"]
+mod shared;
 #[path = "common/sweep_rrd.rs"]
 mod sweep_rrd;
 #[path = "common/tiny_style.rs"]
@@ -434,11 +436,7 @@ fn each_run_equals_the_same_configuration_run_alone_bit_for_bit() {
 
 #[test]
 fn merged_parts_are_one_recording_with_every_run() {
-    let tool = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/tools/rerun-cli");
-    if !tool.exists() {
-        eprintln!("skipping: {} is not installed", tool.display());
-        return;
-    }
+    let tool = shared::rerun_cli();
     let dir = tempfile::tempdir().unwrap();
     let style = tiny(dir.path());
     let p = |n: &str| dir.path().join(n);

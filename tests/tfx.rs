@@ -6,18 +6,12 @@ use std::path::{Path, PathBuf};
 use wisptree::style::tfx::{load_project_spheres, load_tfx, parse_tfx, write_tfx_v4};
 use wisptree::style::StyleError;
 
-/// The shared TressFX data folder, or `None` (with the reason printed) when it is absent.
-fn data_dir() -> Option<PathBuf> {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/data/tressfx");
-    if dir.is_dir() {
-        Some(dir)
-    } else {
-        eprintln!(
-            "SKIP: {} is absent (the shared TressFX data is not checked out)",
-            dir.display()
-        );
-        None
-    }
+#[path = "common/shared.rs"]
+mod shared;
+
+/// The shared TressFX data folder; the test fails, saying how to get it, when it is absent.
+fn data_dir() -> PathBuf {
+    shared::shared_path("data/tressfx")
 }
 
 /// The message of a `StyleError::Tfx`, or a test failure naming what came instead.
@@ -84,7 +78,7 @@ fn v3_bytes(strands: &[Vec<[f32; 3]>]) -> Vec<u8> {
 
 #[test]
 fn ponytail_parts_load_root_first() {
-    let Some(dir) = data_dir() else { return };
+    let dir = data_dir();
     // The project's spheres (cm) around the head: roots lie on the scalp, tips hang away.
     let spheres = [
         ([-0.095, 92.000, 9.899], 26.5),
@@ -143,7 +137,7 @@ fn ponytail_parts_load_root_first() {
 
 #[test]
 fn ponytail_project_spheres_in_metres() {
-    let Some(dir) = data_dir() else { return };
+    let dir = data_dir();
     let path = dir.join("ponytail/ponytail.tfxproj");
     let want = [
         [-0.095, 92.000, 9.899, 26.5],
@@ -165,7 +159,7 @@ fn ponytail_project_spheres_in_metres() {
 
 #[test]
 fn test_hair_loads_10027_strands_of_4() {
-    let Some(dir) = data_dir() else { return };
+    let dir = data_dir();
     let strands = load_tfx(&dir.join("TestHair1.tfx")).unwrap();
     assert_eq!(strands.len(), 10_027);
     assert!(strands.iter().all(|s| s.len() == 4));
@@ -237,7 +231,7 @@ fn truncated_files_say_how_much_is_missing() {
 
 #[test]
 fn truncated_real_file() {
-    let Some(dir) = data_dir() else { return };
+    let dir = data_dir();
     let bytes = std::fs::read(dir.join("ponytail/tail.tfx")).unwrap();
     let cut = 296 + 12 * 16 * 100 + 7; // 100 whole strands and a bit
     let msg = tfx_msg(parse_tfx(Path::new("tail.tfx"), &bytes[..cut]));

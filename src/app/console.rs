@@ -2,21 +2,27 @@
 
 use std::time::Duration;
 
-use super::tune::{self, KeyAction};
+use super::keys::{self, KeyAction};
+use super::terminal;
 
 /// Prints lines around the progress bar and the raw terminal.
 #[derive(Clone, Default)]
 pub struct Console {
     /// The progress bar, when one is shown.
     pub bar: Option<indicatif::ProgressBar>,
+    /// Say nothing (a run inside `bench --live`, whose rows are the output).
+    pub quiet: bool,
 }
 
 impl Console {
     /// Prints one message line (several, if it has newlines) to stderr.
     pub fn say(&self, msg: &str) {
+        if self.quiet {
+            return;
+        }
         if let Some(b) = &self.bar {
             b.println(msg);
-        } else if tune::raw_mode_active() {
+        } else if terminal::raw_mode_active() {
             // Raw mode: a newline does not return the carriage.
             eprint!("{}\r\n", msg.replace('\n', "\r\n"));
         } else {
@@ -49,7 +55,7 @@ pub fn poll_key(timeout: Duration) -> std::io::Result<Option<KeyAction>> {
         return Ok(None);
     }
     Ok(match read()? {
-        Event::Key(k) => tune::key_action(&k),
+        Event::Key(k) => keys::key_action(&k),
         _ => None,
     })
 }

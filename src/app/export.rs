@@ -157,7 +157,7 @@ pub fn export(opts: &ExportOptions, progress: bool) -> anyhow::Result<ExportSumm
 fn check_options(opts: &ExportOptions) -> Result<(), BadInput> {
     if !(opts.seconds.is_finite() && opts.seconds > 0.0) {
         return Err(BadInput(format!(
-            "--seconds must be a positive number, got {}",
+            "--seconds must be a positive number, got {:?}",
             opts.seconds
         )));
     }

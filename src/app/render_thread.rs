@@ -10,6 +10,12 @@
 //! is single-threaded, and done in line it left one of the renderer's two cores idle for a
 //! tenth of every frame. Frames keep their order (one encoder, first in first out), and the
 //! images go back to the renderer to be drawn into again.
+//!
+//! The simulation comes first: the render thread lowers its own scheduling priority before it
+//! builds the renderer, whose pool threads inherit it (on Linux a thread's nice value is its
+//! own and passes to the threads it starts). On a 2-core machine the simulation's two threads
+//! then get the cores when they need them, and the renderer takes what is left: a live run
+//! skips images, not simulation frames.
 
 use crossbeam_channel::{Receiver, Sender};
 use std::thread::JoinHandle;
@@ -31,6 +37,70 @@ pub const RENDER_SKIPPED: &str = "/stats/render_skipped";
 pub fn scene_camera(scene: &Scene) -> Camera {
     let (lo, hi) = scene.hair_extent();
     Camera::from_params(&scene.loaded.style.render, lo, hi, DEFAULT_VIEW)
+}
+
+/// How much lower than the simulation the render threads run (nice value, 0–19).
+#[cfg_attr(not(target_os = "linux"), allow(dead_code))]
+const RENDER_NICENESS: i32 = 10;
+
+/// What the render thread is started with; it builds its renderer itself (see the module doc).
+pub struct RenderSetup {
+    /// The style's render settings.
+    pub params: crate::style::RenderParams,
+    /// Width and height, pixels.
+    pub size: (u32, u32),
+    /// The camera.
+    pub camera: Camera,
+    /// Frames from the simulation.
+    pub input: Receiver<Frame>,
+    /// Frames on to the logger.
+    pub output: Sender<Frame>,
+    /// Skip an image when frames wait behind it.
+    pub live: bool,
+}
+
+/// Starts the render thread at a lower priority than the caller's; returns once its renderer
+/// is built, or why it could not be.
+pub fn start(setup: RenderSetup) -> Result<(), String> {
+    let (ready_tx, ready_rx) = crossbeam_channel::bounded::<Result<(), String>>(1);
+    std::thread::Builder::new()
+        .name("wisptree-render".into())
+        .spawn(move || {
+            lower_this_threads_priority();
+            let (w, h) = setup.size;
+            let renderer = match Renderer::new(setup.params, w, h, crate::render::default_threads())
+            {
+                Ok(r) => r,
+                Err(e) => {
+                    let _ = ready_tx.send(Err(e));
+                    return;
+                }
+            };
+            let _ = ready_tx.send(Ok(()));
+            RenderThread {
+                renderer,
+                camera: setup.camera,
+                input: setup.input,
+                output: setup.output,
+                live: setup.live,
+            }
+            .run();
+        })
+        .map_err(|e| format!("starting the render thread: {e}"))?;
+    ready_rx
+        .recv()
+        .unwrap_or_else(|_| Err("the render thread stopped while starting".to_owned()))
+}
+
+/// Raises this thread's nice value (Linux: per thread); elsewhere, or if refused, nothing.
+fn lower_this_threads_priority() {
+    #[cfg(target_os = "linux")]
+    // SAFETY: plain system calls on this thread's own id; a failure is harmless.
+    unsafe {
+        let tid = libc::syscall(libc::SYS_gettid) as libc::id_t;
+        let now = libc::getpriority(libc::PRIO_PROCESS, tid);
+        libc::setpriority(libc::PRIO_PROCESS, tid, (now + RENDER_NICENESS).min(19));
+    }
 }
 
 /// The render thread's inputs.

@@ -29,8 +29,7 @@ use crate::style::builtin::StyleSource;
 
 use super::console::Console;
 use super::stop::{stop_on_ctrl_c, StopSignal};
-use super::threads::{simulate, LoopOptions, WebLink};
-use super::tune;
+use super::threads::{simulate, LoopOptions, RunSummary, WebLink};
 use crate::web::{ControlPage, PageConfig, SharedState};
 use std::sync::Arc;
 
@@ -96,35 +95,12 @@ impl Default for RunOptions {
     }
 }
 
-/// What a run did.
-#[derive(Debug, Clone, Default, PartialEq)]
-pub struct RunSummary {
-    /// Frames handed to Rerun.
-    pub frames_logged: u64,
-    /// Frames the simulation produced but dropped because the logger fell behind (live only).
-    pub frames_dropped: u64,
-    /// Simulated time at the last frame, s (continuing across restarts).
-    pub sim_time: f64,
-    /// Splits over the run.
-    pub splits: u64,
-    /// Merges over the run.
-    pub merges: u64,
-    /// Stopped before the requested duration (Ctrl-C, `q`, a test's stop, a lost viewer).
-    pub interrupted: bool,
-    /// The viewer went away (or never answered).
-    pub viewer_lost: bool,
-    /// Parameter reloads applied.
-    pub reloads: u32,
-    /// Restarts done.
-    pub restarts: u32,
-}
-
 /// `wisptree run`: installs the Ctrl-C handler and runs [`run_with`].
 pub fn run(opts: RunOptions) -> anyhow::Result<()> {
     let stop = StopSignal::new();
     stop_on_ctrl_c(&stop)?;
     let result = run_with(opts, stop);
-    tune::restore_terminal();
+    super::terminal::restore_terminal();
     result.map(|_| ())
 }
 
@@ -170,6 +146,8 @@ pub fn run_with(opts: RunOptions, stop: StopSignal) -> anyhow::Result<RunSummary
         progress: sink.file.is_some(),
         strands: opts.strands,
         render: opts.render,
+        render_skips_when_behind: sink.live,
+        quiet: false,
         web,
     };
     let file = sink.file.clone();

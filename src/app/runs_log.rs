@@ -4,6 +4,7 @@
 
 use crate::frame::Frame;
 use crate::pipeline::{self, FrameBuilder};
+use crate::report::tempo::RealtimeMeter;
 use crate::report::{Aggregate, Stat};
 use crate::solver::Solver;
 use crate::stream::sink::Recording;
@@ -20,6 +21,8 @@ pub struct RunLog {
     rec: Recording,
     logger: Logger,
     builder: FrameBuilder,
+    /// How fast this run goes: the time between two of its frames.
+    meter: RealtimeMeter,
     /// The frame being built: [`pipeline::step_frame`] writes its counters and events.
     pub frame: Frame,
     index: u64,
@@ -46,6 +49,7 @@ impl RunLog {
             logger: Logger::new(rec.clone(), &setup)?,
             builder: FrameBuilder::new(model, strands, super::STRAND_SUBDIVISIONS),
             frame: Frame::default(),
+            meter: RealtimeMeter::new(),
             index: 0,
         })
     }
@@ -56,6 +60,9 @@ impl RunLog {
         let f = &mut self.frame;
         self.builder.fill(solver, f);
         f.index = self.index;
+        f.realtime_factor = self
+            .meter
+            .frame_done(solver.dt() * solver.steps_per_frame() as f64);
         pipeline::fill_stats(f, solver.params());
         let total: u32 = f.counters.active_per_level.iter().sum();
         f.stats.push(Stat {

@@ -7,10 +7,12 @@ use std::time::{Duration, Instant};
 use crossbeam_channel::{Receiver, Sender, TrySendError};
 
 use super::console::Console;
+use super::keys::{self, KeyAction};
+use super::page_params;
 use super::stop::StopSignal;
-use super::tune::{self, KeyAction};
 use crate::frame::Frame;
 use crate::pipeline::{self, FrameBuilder};
+use crate::report::tempo::{RealtimeMeter, Tempo, SLOW_BELOW};
 use crate::scene::Scene;
 use crate::solver::Solver;
 use crate::style::{SimParams, Wind};
@@ -54,6 +56,44 @@ pub struct SimOutcome {
     pub merges: u64,
     /// Restarts (reloaded model, restart key).
     pub restarts: u32,
+    /// How fast the frames came: real-time factor, frame wall times.
+    pub tempo: Tempo,
+    /// What the solver carried: active nodes (or guides, or wisp points) and contacts.
+    pub load: Load,
+}
+
+/// What the solver carried over a run, frame by frame (the `bench --live` columns).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Load {
+    /// Frames counted.
+    pub frames: u64,
+    /// Sum over frames of the active nodes (guides, wisp points) after the frame's last step.
+    pub active_sum: f64,
+    /// The most active nodes after any frame.
+    pub active_max: u32,
+    /// Sum over frames of the segment pairs in contact per step.
+    pub contacts_per_step_sum: f64,
+}
+
+impl Load {
+    fn add(&mut self, f: &Frame, steps_per_frame: usize) {
+        let active: u32 = f.counters.active_per_level.iter().sum();
+        self.frames += 1;
+        self.active_sum += f64::from(active);
+        self.active_max = self.active_max.max(active);
+        self.contacts_per_step_sum +=
+            f64::from(f.counters.pairs_in_contact) / steps_per_frame.max(1) as f64;
+    }
+
+    /// Mean active nodes (guides, wisp points) per frame.
+    pub fn mean_active(&self) -> f64 {
+        self.active_sum / self.frames.max(1) as f64
+    }
+
+    /// Mean segment pairs in contact per step.
+    pub fn contacts_per_step(&self) -> f64 {
+        self.contacts_per_step_sum / self.frames.max(1) as f64
+    }
 }
 
 /// Everything the simulation thread owns.
@@ -91,6 +131,10 @@ struct LoopState {
     /// The control page's wind strength in force, and the wind it scales.
     wind_strength: f64,
     base_wind: Wind,
+    /// How fast the frames come (`/stats/realtime_factor`).
+    meter: RealtimeMeter,
+    /// Whether this scene's run already said it fell below real time.
+    said_slow: bool,
 }
 
 impl SimThread {
@@ -106,8 +150,10 @@ impl SimThread {
             paused: false,
             time_offset: 0.0,
             out: SimOutcome::default(),
-            wind_strength: tune::initial_wind_strength(&self.scene.loaded.style.sim.wind),
-            base_wind: tune::base_wind(&self.scene.loaded.style.sim.wind),
+            wind_strength: page_params::initial_wind_strength(&self.scene.loaded.style.sim.wind),
+            base_wind: page_params::base_wind(&self.scene.loaded.style.sim.wind),
+            meter: RealtimeMeter::new(),
+            said_slow: false,
         };
         say_ignored(&*st.solver, console, &mut st.messages);
         let mut report = st.solver.new_report();
@@ -117,6 +163,8 @@ impl SimThread {
         let mut origin = Instant::now();
         let mut origin_index = 0u64;
         let mut index = 0u64;
+        // Loading and settling are not the run's frames.
+        st.meter.restart_clock();
 
         while !stop.is_stopped() && self.frames_total.is_none_or(|n| index < n) {
             if self.apply_controls(&mut st, console) {
@@ -129,6 +177,7 @@ impl SimThread {
                 std::thread::sleep(PAUSE_POLL);
                 origin = Instant::now();
                 origin_index = index;
+                st.meter.restart_clock();
                 continue;
             }
             let mut frame = match carry.take() {
@@ -143,6 +192,9 @@ impl SimThread {
             make_frame(&mut st, &mut report, &mut frame, index);
             index += 1;
             st.out.frames = index;
+            if self.live {
+                self.say_if_slow(&mut st, &frame, console);
+            }
 
             if self.live {
                 match self.tx.try_send(frame) {
@@ -162,7 +214,23 @@ impl SimThread {
                 break;
             }
         }
+        st.out.tempo = st.meter.tempo().clone();
         st.out
+    }
+
+    /// Says once per scene, on the console, the page and in the recording's log, that a live
+    /// run fell below real time, and the likely cause.
+    fn say_if_slow(&self, st: &mut LoopState, f: &Frame, console: &Console) {
+        if st.said_slow || !st.meter.window_settled() || f.realtime_factor >= SLOW_BELOW {
+            return;
+        }
+        st.said_slow = true;
+        let msg = slow_motion_message(&*st.solver, f, self.render);
+        console.say(&msg);
+        if let Some(s) = &self.shared {
+            s.log(&msg);
+        }
+        st.messages.push(msg);
     }
 
     /// Applies every pending control message; true if any arrived (the clock restarts).
@@ -180,14 +248,14 @@ impl SimThread {
             };
             match c {
                 Control::Params(p, msg) => {
-                    st.wind_strength = tune::initial_wind_strength(&p.wind);
-                    st.base_wind = tune::base_wind(&p.wind);
+                    st.wind_strength = page_params::initial_wind_strength(&p.wind);
+                    st.base_wind = page_params::base_wind(&p.wind);
                     st.solver.set_params(&p);
                     say(msg, st);
                 }
                 Control::Set(param, value) => {
                     let mut p = st.solver.params().clone();
-                    let msg = tune::apply_param(
+                    let msg = page_params::apply_param(
                         &mut p,
                         &mut st.wind_strength,
                         &st.base_wind,
@@ -216,14 +284,18 @@ impl SimThread {
                     let params = st.solver.params().clone();
                     self.replace_scene(st, *s);
                     st.solver = self.scene.solver_with(&params);
+                    st.said_slow = false;
+                    st.meter.restart_clock();
                 }
                 Control::Rebuild(s, msg) => {
                     say(msg, st);
                     self.replace_scene(st, *s);
                     st.solver = self.scene.solver();
+                    st.said_slow = false;
+                    st.meter.restart_clock();
                     st.wind_strength =
-                        tune::initial_wind_strength(&self.scene.loaded.style.sim.wind);
-                    st.base_wind = tune::base_wind(&self.scene.loaded.style.sim.wind);
+                        page_params::initial_wind_strength(&self.scene.loaded.style.sim.wind);
+                    st.base_wind = page_params::base_wind(&self.scene.loaded.style.sim.wind);
                 }
                 Control::Key(KeyAction::TogglePause) => {
                     st.paused = !st.paused;
@@ -237,6 +309,7 @@ impl SimThread {
                     st.time_offset += st.solver.time();
                     let params = st.solver.params().clone();
                     st.solver = self.scene.solver_with(&params);
+                    st.meter.restart_clock();
                     say(
                         "restarted the simulation with the parameters in force".to_owned(),
                         st,
@@ -245,7 +318,7 @@ impl SimThread {
                 }
                 Control::Key(a) => {
                     let mut p = st.solver.params().clone();
-                    if let Some(msg) = tune::apply_key(&mut p, a) {
+                    if let Some(msg) = keys::apply_key(&mut p, a) {
                         st.solver.set_params(&p);
                         say(msg, st);
                     }
@@ -290,6 +363,7 @@ impl SimThread {
                 dt: st.solver.dt(),
             },
             st.time_offset + st.solver.time(),
+            st.meter.window_factor(),
         );
     }
 }
@@ -310,6 +384,10 @@ fn make_frame(
     f.index = index;
     f.sim_time += st.time_offset;
     f.dropped_frames = st.out.dropped;
+    f.realtime_factor = st
+        .meter
+        .frame_done(st.solver.dt() * st.solver.steps_per_frame() as f64);
+    st.out.load.add(f, st.solver.steps_per_frame());
     pipeline::fill_stats(f, st.solver.params());
     st.out.splits += f.splits as u64;
     st.out.merges += f.merges as u64;
@@ -337,6 +415,44 @@ fn pace(
         }
         std::thread::sleep((due - now).min(PAUSE_POLL));
     }
+}
+
+/// The line a live run says when it falls below real time: how slow, and what it carries
+/// that a user can change (model, strands, the threshold that sets the AWT's node count).
+pub fn slow_motion_message(solver: &dyn Solver, f: &Frame, rendering: bool) -> String {
+    let active: u32 = f.counters.active_per_level.iter().sum();
+    let strands = solver.model().strands.len();
+    let p = solver.params();
+    let cause = match solver.kind() {
+        crate::solver::SolverKind::Awt => format!(
+            "model awt, {strands} strands, {active} active nodes at split threshold {} \
+             N·m·kg⁻¹ (a higher split threshold keeps fewer nodes active)",
+            p.split_threshold
+        ),
+        crate::solver::SolverKind::SingleLevel => format!(
+            "model single-level: all {active} finest nodes active, {strands} strands \
+             (the AWT adapts and is faster)"
+        ),
+        crate::solver::SolverKind::Guides => format!(
+            "model guides, {active} guide strands for {strands} strands (fewer guides: \
+             `guides:` in the style)"
+        ),
+        crate::solver::SolverKind::Layered => {
+            format!("model layered, {active} skeleton points for {strands} strands")
+        }
+    };
+    let render = if rendering {
+        "; rendering shares the cores (--no-render frees them)"
+    } else {
+        ""
+    };
+    format!(
+        "wisptree: the simulation runs at ×{:.2} of real time (slow motion): {cause}, {:.0} \
+         segment pairs in contact per step, {:.1} ms per step{render}",
+        f.realtime_factor,
+        f64::from(f.counters.pairs_in_contact) / solver.steps_per_frame().max(1) as f64,
+        f.step_ms,
+    )
 }
 
 /// Says once which `sim:` parameters the solver ignores.

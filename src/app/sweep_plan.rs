@@ -63,7 +63,7 @@ fn threshold(v: f64) -> Result<f64, String> {
         // `-0` is zero: the label says `0`, not `-0`.
         Ok(v + 0.0)
     } else {
-        Err(format!("must be zero or positive, got {v}"))
+        Err(format!("must be zero or positive, got {v:?}"))
     }
 }
 

@@ -10,12 +10,13 @@ use anyhow::Context as _;
 use crossbeam_channel::{Receiver, Sender};
 
 use super::console::{poll_key, Console};
+use super::keys::{self, KeyAction};
 use super::log_thread::LogThread;
 use super::reload::handle_reload;
-use super::run::RunSummary;
-use super::sim_thread::{Control, SimOutcome, SimThread};
+use super::sim_thread::{Control, Load, SimOutcome, SimThread};
 use super::stop::StopSignal;
-use super::tune::{self, KeyAction};
+use super::style_watcher::StyleWatcher;
+use super::terminal::RawTerminal;
 use crate::frame::Frame;
 use crate::scene::Scene;
 use crate::stream::sink::{OpenSink, SinkWatcher, ViewerStatus};
@@ -51,6 +52,11 @@ pub struct LoopOptions {
     pub strands: usize,
     /// Render every frame at this size (width, height) on a render thread; `None`: off.
     pub render: Option<(u32, u32)>,
+    /// The renderer skips a frame's image when frames wait behind it, as live runs do
+    /// (simulation frames are never skipped); `bench --live` does so unpaced.
+    pub render_skips_when_behind: bool,
+    /// Print nothing on the console (the run's log still goes to the recording).
+    pub quiet: bool,
     /// The control page's requests and the state it shows (`run --web`).
     pub web: Option<WebLink>,
 }
@@ -74,6 +80,33 @@ struct Workers {
     logged: Arc<AtomicU64>,
 }
 
+/// What a run did.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct RunSummary {
+    /// Frames handed to Rerun.
+    pub frames_logged: u64,
+    /// Frames the simulation produced but dropped because the logger fell behind (live only).
+    pub frames_dropped: u64,
+    /// Simulated time at the last frame, s (continuing across restarts).
+    pub sim_time: f64,
+    /// Splits over the run.
+    pub splits: u64,
+    /// Merges over the run.
+    pub merges: u64,
+    /// Stopped before the requested duration (Ctrl-C, `q`, a test's stop, a lost viewer).
+    pub interrupted: bool,
+    /// The viewer went away (or never answered).
+    pub viewer_lost: bool,
+    /// Parameter reloads applied.
+    pub reloads: u32,
+    /// Restarts done.
+    pub restarts: u32,
+    /// How fast the simulation's frames came, frame by frame (the real-time factor).
+    pub tempo: crate::report::tempo::Tempo,
+    /// What the solver carried: active nodes, contacts.
+    pub load: Load,
+}
+
 /// Runs the scene into the sink until `opts.seconds` are simulated or `stop` is triggered. A
 /// live viewer is watched: one that goes away stops the run.
 pub fn simulate(
@@ -83,11 +116,12 @@ pub fn simulate(
     stop: &StopSignal,
 ) -> anyhow::Result<RunSummary> {
     let frames_total = opts.seconds.map(|s| scene.frames_for(s));
-    let console = if opts.progress {
+    let mut console = if opts.progress {
         Console::with_progress(frames_total)
     } else {
         Console::default()
     };
+    console.quiet = opts.quiet;
     let viewer = sink.watcher();
     let w = start_workers(scene, sink, opts, frames_total, stop, &console)?;
     let mut summary = RunSummary::default();
@@ -133,6 +167,8 @@ pub fn simulate(
     summary.splits = sim.splits;
     summary.merges = sim.merges;
     summary.restarts += sim.restarts;
+    summary.tempo = sim.tempo;
+    summary.load = sim.load;
     summary.interrupted = asked_to_stop && frames_total.is_none_or(|n| sim.frames < n);
     if let Some(msg) = never_connected {
         // Nothing was shown anywhere: an error, not a normal end.
@@ -155,33 +191,23 @@ fn start_workers(
 ) -> anyhow::Result<Workers> {
     let (frame_tx, sim_rx) = crossbeam_channel::bounded::<Frame>(QUEUE_FRAMES);
     // With rendering, frames go simulation → renderer → logger; without, straight through.
-    let (frame_rx, renderer) = match opts.render {
-        Some((w, h)) => {
+    let frame_rx = match opts.render {
+        Some(size) => {
             let (tx, rx) = crossbeam_channel::bounded::<Frame>(QUEUE_FRAMES);
-            let r = crate::render::Renderer::new(
-                scene.loaded.style.render.clone(),
-                w,
-                h,
-                crate::render::default_threads(),
-            )
-            .map_err(|e| crate::error::BadInput(format!("rendering: {e}")))?;
-            let thread = super::render_thread::RenderThread {
-                renderer: r,
+            let setup = super::render_thread::RenderSetup {
+                params: scene.loaded.style.render.clone(),
+                size,
                 camera: super::render_thread::scene_camera(scene),
                 input: sim_rx,
                 output: tx,
-                live: opts.live,
+                live: opts.render_skips_when_behind,
             };
-            (rx, Some(thread))
+            super::render_thread::start(setup)
+                .map_err(|e| crate::error::BadInput(format!("rendering: {e}")))?;
+            rx
         }
-        None => (sim_rx, None),
+        None => sim_rx,
     };
-    if let Some(t) = renderer {
-        std::thread::Builder::new()
-            .name("wisptree-render".into())
-            .spawn(move || t.run())
-            .context("starting the render thread")?;
-    }
     // Unbounded, but it never holds more frames than exist: QUEUE_FRAMES + 2 or so.
     let (free_tx, free_rx) = crossbeam_channel::unbounded::<Frame>();
     let (ctl_tx, ctl_rx) = crossbeam_channel::unbounded::<Control>();
@@ -265,15 +291,15 @@ fn watch_run(
     summary: &mut RunSummary,
 ) -> Option<String> {
     let raw = if opts.keys {
-        tune::RawTerminal::enter()
+        RawTerminal::enter()
     } else {
         None
     };
     if raw.is_some() {
-        console.say(tune::KEY_HELP);
+        console.say(keys::KEY_HELP);
     }
     let mut watcher = match scene.source.file() {
-        Some(path) if opts.watch => match tune::StyleWatcher::new(path) {
+        Some(path) if opts.watch => match StyleWatcher::new(path) {
             Ok(w) => {
                 console.say(&format!("watching {} for changes", path.display()));
                 Some(w)
@@ -297,7 +323,7 @@ fn watch_run(
                     console.say("quitting");
                     stop.stop();
                 }
-                Ok(Some(KeyAction::Help)) => console.say(tune::KEY_HELP),
+                Ok(Some(KeyAction::Help)) => console.say(keys::KEY_HELP),
                 Ok(Some(a)) => {
                     let _ = w.ctl.send(Control::Key(a));
                 }
@@ -313,15 +339,10 @@ fn watch_run(
         } else {
             std::thread::sleep(POLL);
         }
-        if watcher.as_mut().is_some_and(|w| w.poll()) {
-            handle_reload(
-                &mut current,
-                &mut file_style,
-                &w.ctl,
-                &w.notes,
-                console,
-                summary,
-            );
+        if watcher.as_mut().is_some_and(|w| w.poll())
+            && handle_reload(&mut current, &mut file_style, &w.ctl, &w.notes, console)
+        {
+            summary.reloads += 1;
         }
         if let Some(web) = &opts.web {
             while let Ok(cmd) = web.commands.try_recv() {

@@ -12,6 +12,7 @@
 //!
 //! Nothing here asserts a time: numbers are printed (and written as JSON) for people to read.
 
+pub mod live;
 mod pipeline;
 mod print;
 pub mod render;
@@ -78,6 +79,9 @@ pub struct BenchOptions {
     pub render: bool,
     /// Frames per renderer timing.
     pub render_frames: usize,
+    /// Run the live matrix (only that): every solver × style × motion, the slider ends, and
+    /// rendering on.
+    pub live: bool,
 }
 
 /// One row of the §5.2 table (a style under both `single-level` and `awt`), as written to JSON.
@@ -188,6 +192,9 @@ pub struct BenchReport {
     /// The renderer on three scenes (with `--render`).
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub render: Vec<render::RenderRow>,
+    /// The live matrix (with `--live`).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub live: Vec<live::LiveRow>,
 }
 
 fn cores() -> usize {
@@ -357,7 +364,11 @@ fn bench_styles(
 pub fn run(o: &BenchOptions) -> anyhow::Result<()> {
     // Progress in 10 ms steps (only the bar's length depends on it).
     let per_run = steps_for(o.seconds, 0.01) as u64;
-    let runs = o.styles.len() as u64 * (o.solvers.len() as u64 + u64::from(cores() > 1));
+    let runs = if o.live {
+        0
+    } else {
+        o.styles.len() as u64 * (o.solvers.len() as u64 + u64::from(cores() > 1))
+    };
     let total = per_run * runs + if o.pipeline { 2 * per_run } else { 0 };
     let progress = ProgressBar::new(total);
     progress.set_style(
@@ -367,7 +378,13 @@ pub fn run(o: &BenchOptions) -> anyhow::Result<()> {
         .expect("a valid progress template")
         .progress_chars("=> "),
     );
-    let (models, solvers) = bench_styles(o, &progress)?;
+    let (models, solvers) = if o.live {
+        // The live matrix runs alone, with its own progress bar.
+        progress.finish_and_clear();
+        (None, Vec::new())
+    } else {
+        bench_styles(o, &progress)?
+    };
     let (pipeline, pipeline_sequential) = if o.pipeline {
         let temp = |what: &str| {
             std::env::temp_dir().join(format!("wisptree-bench-{}-{what}.rrd", std::process::id()))
@@ -397,6 +414,11 @@ pub fn run(o: &BenchOptions) -> anyhow::Result<()> {
     } else {
         Vec::new()
     };
+    let live_rows = if o.live {
+        live::bench_live(&o.styles, o.seconds, o.strands)?
+    } else {
+        Vec::new()
+    };
 
     let report = BenchReport {
         machine: machine_description(),
@@ -409,8 +431,12 @@ pub fn run(o: &BenchOptions) -> anyhow::Result<()> {
         pipeline,
         pipeline_sequential,
         render: render_rows,
+        live: live_rows,
     };
     print_report(&report);
+    if !report.live.is_empty() {
+        live::print_live(&report.live, o.seconds);
+    }
     if !report.render.is_empty() {
         render::print_render(&report.render);
     }

@@ -36,6 +36,7 @@ pub fn time_pipeline(
     let mut frame = Frame::default();
     let mut report = solver.new_report();
     let setup_time = t_start.elapsed();
+    let mut meter = crate::report::tempo::RealtimeMeter::new();
 
     let frames = scene.frames_for(seconds) as usize;
     let (mut step_t, mut build_t, mut log_t) = (Duration::ZERO, Duration::ZERO, Duration::ZERO);
@@ -47,6 +48,7 @@ pub fn time_pipeline(
         step_t += t1 - t0;
         builder.fill(&mut *solver, &mut frame);
         frame.index = index as u64;
+        frame.realtime_factor = meter.frame_done(solver.dt() * solver.steps_per_frame() as f64);
         crate::pipeline::fill_stats(&mut frame, solver.params());
         let t2 = Instant::now();
         build_t += t2 - t1;

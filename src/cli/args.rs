@@ -205,12 +205,13 @@ pub fn parse_seconds(s: &str) -> Result<f64, String> {
     }
 }
 
-fn parse_strands(s: &str) -> Result<usize, String> {
-    let v: usize = s
+/// `--strands`: a whole number, at least 1.
+pub fn parse_strands(s: &str) -> Result<usize, String> {
+    let v: i128 = s
         .parse()
         .map_err(|_| format!("`{s}` is not a whole number of strands"))?;
-    if v == 0 {
-        return Err("at least one strand must be drawn".to_owned());
+    if v < 1 {
+        return Err(format!("{s}: at least one strand must be drawn"));
     }
-    Ok(v)
+    usize::try_from(v).map_err(|_| format!("{s}: too many strands"))
 }

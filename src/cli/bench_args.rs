@@ -50,6 +50,14 @@ pub struct BenchArgs {
     /// bursts of other work slow a few frames a lot: the median is the renderer's own speed).
     #[arg(long)]
     pub render: bool,
+    /// Can every model keep up live? Runs the whole `run` pipeline (simulation, strands,
+    /// logging into memory; unpaced) for awt, layered and guides (whatever --solvers says) on
+    /// every --models style under every motion preset, the AWT at the page's slider ends under
+    /// `shake`, and the AWT with rendering on. Prints each row's real-time factor (simulated ÷
+    /// wall seconds: under 1 is slow motion), 95th-percentile frame time, active nodes and
+    /// contacts, the worst row last (JSON key "live"). 5 s simulated per row, 1 with --quick.
+    #[arg(long, conflicts_with = "render")]
+    pub live: bool,
 }
 
 impl BenchArgs {
@@ -58,11 +66,13 @@ impl BenchArgs {
         let seconds = match self.seconds {
             Some(s) if !(s.is_finite() && s > 0.0 && s <= 3600.0) => {
                 return Err(BadInput(format!(
-                    "--seconds must be a positive number of seconds up to 3600, got {s}"
+                    "--seconds must be a positive number of seconds up to 3600, got {s:?}"
                 ))
                 .into());
             }
             Some(s) => s,
+            None if self.live && self.quick => 1.0,
+            None if self.live => 5.0,
             None if self.quick => 0.5,
             None => 10.0,
         };
@@ -90,13 +100,14 @@ impl BenchArgs {
             seconds,
             styles,
             solvers,
-            pipeline: !self.no_pipeline && !self.render,
+            pipeline: !self.no_pipeline && !self.render && !self.live,
             pipeline_style: self.style("long_curly")?,
             strands: self.strands,
             rrd: self.rrd.clone(),
             json: self.json.clone(),
             render: self.render,
             render_frames: if self.quick { 3 } else { 30 },
+            live: self.live,
         })
     }
 

@@ -8,10 +8,10 @@ use crate::app::experiment::ExperimentCommand;
 #[derive(Debug, Clone, clap::Args)]
 pub struct ExperimentArgs {
     /// The experiment (see --list).
-    #[arg(value_name = "NAME", required_unless_present = "list")]
+    #[arg(value_name = "NAME", required = true)]
     pub name: Option<String>,
-    /// List the experiments with what each shows.
-    #[arg(long)]
+    /// List the experiments with what each shows (instead of running one).
+    #[arg(long, conflicts_with = "name")]
     pub list: bool,
     /// Record every run to this `.rrd` (one subtree `/runs/<label>` per run).
     #[arg(long, value_name = "FILE")]

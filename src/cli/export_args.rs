@@ -9,7 +9,7 @@ use crate::solver::SolverKind;
 #[derive(Debug, clap::Args)]
 pub struct ExportArgs {
     /// The hairstyle: a built-in name or a style file.
-    #[arg(long, value_name = "NAME|PATH")]
+    #[arg(long, value_name = "NAME|PATH", default_value = crate::app::run::DEFAULT_STYLE)]
     pub style: String,
     /// Head and body motion: a preset (still, lean, run, jump, shake, stop) or a `.ron` file.
     #[arg(long, value_name = "NAME|PATH", default_value = crate::app::run::DEFAULT_MOTION)]
@@ -18,7 +18,7 @@ pub struct ExportArgs {
     #[arg(long, value_name = "MODEL", default_value = "awt", value_parser = SolverKind::parse)]
     pub model: SolverKind,
     /// Simulated seconds.
-    #[arg(long, value_name = "S")]
+    #[arg(long, value_name = "S", default_value = "1", value_parser = super::args::parse_seconds)]
     pub seconds: f64,
     /// File format.
     #[arg(long, value_enum, default_value_t = ExportFormat::Hair)]

@@ -11,7 +11,7 @@ mod render_args;
 mod styles;
 mod sweep_args;
 
-use clap::{Parser, Subcommand};
+use clap::{CommandFactory as _, FromArgMatches as _, Parser, Subcommand};
 
 pub use args::{RunArgs, SinkArgs};
 pub use bench_args::BenchArgs;
@@ -66,9 +66,28 @@ pub enum Command {
     Sweep(SweepArgs),
 }
 
+/// The command line as clap parses it: [`Cli`], where every option that takes a value also
+/// takes a negative number, so that `--seconds -1` gets the option's own range check instead of
+/// clap's "unexpected argument '-1'".
+pub fn command() -> clap::Command {
+    negative_numbers_are_values(Cli::command())
+}
+
+/// `cmd` and its subcommands with `allow_negative_numbers` on every option that takes a value.
+fn negative_numbers_are_values(cmd: clap::Command) -> clap::Command {
+    cmd.mut_args(|a| {
+        if a.get_action().takes_values() {
+            a.allow_negative_numbers(true)
+        } else {
+            a
+        }
+    })
+    .mut_subcommands(negative_numbers_are_values)
+}
+
 /// Runs the command line; returns the process exit code.
 pub fn main() -> i32 {
-    let cli = Cli::parse();
+    let cli = Cli::from_arg_matches(&command().get_matches()).unwrap_or_else(|e| e.exit());
     let result = match cli.command {
         Some(Command::Inspect(a)) => inspect::inspect(&a),
         Some(Command::Styles(a)) => styles::styles(&a),

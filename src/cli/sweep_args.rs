@@ -4,7 +4,7 @@ use std::path::PathBuf;
 
 use clap::builder::TypedValueParser as _;
 
-use super::args::{parse_seconds, parse_size, SinkArgs};
+use super::args::{parse_seconds, parse_size, parse_strands, SinkArgs};
 use crate::app::run::{DEFAULT_MOTION, DEFAULT_STYLE};
 use crate::app::sweep::{SweepCommand, DEFAULT_SWEEP_STRANDS};
 use crate::app::sweep_plan::{SweepLists, SweepSource};
@@ -25,7 +25,7 @@ pub struct SweepArgs {
     #[arg(long, value_name = "S", default_value_t = 10.0, value_parser = parse_seconds)]
     pub seconds: f64,
 
-    /// Split thresholds to sweep (`sim.split_threshold`, m²/s², ≥ 0), comma-separated:
+    /// Split thresholds to sweep (`sim.split_threshold`, N·m·kg⁻¹, ≥ 0), comma-separated:
     /// `--split 0.1,0.2,0.3`.
     #[arg(long, value_name = "LIST", allow_hyphen_values = true)]
     pub split: Option<String>,
@@ -62,12 +62,11 @@ pub struct SweepArgs {
     pub render_size: (u32, u32),
 
     /// Hair strands drawn per frame of each run.
-    #[arg(long, value_name = "N", default_value_t = DEFAULT_SWEEP_STRANDS,
-          value_parser = clap::value_parser!(u64).range(1..).map(|v| v as usize))]
+    #[arg(long, value_name = "N", default_value_t = DEFAULT_SWEEP_STRANDS, value_parser = parse_strands)]
     pub strands: usize,
 
     /// Runs at once (default: one per core). The results do not depend on it.
-    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..1025).map(|v| v as usize))]
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(i64).range(1..1025).map(|v| v as usize))]
     pub jobs: Option<usize>,
 
     /// No progress bar.

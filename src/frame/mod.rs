@@ -172,6 +172,9 @@ pub struct Frame {
     pub merges: u32,
     /// Frames dropped so far because the logger fell behind (live only).
     pub dropped_frames: u64,
+    /// Simulated over wall seconds over the last second of frames (`/stats/realtime_factor`;
+    /// see [`crate::report::tempo`]). Whoever calls [`crate::pipeline::fill_stats`] measures it.
+    pub realtime_factor: f64,
     /// Messages for the text log (parameter changes, reloads, warnings), in order.
     pub messages: Vec<String>,
     /// Number of levels of detail of the model (for the annotation context).

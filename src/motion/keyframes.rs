@@ -74,7 +74,7 @@ impl Keyframes {
                 return err(
                     "time",
                     Some(i),
-                    format!("must be a finite time ≥ 0 s, found {}", k.time),
+                    format!("must be a finite time ≥ 0 s, found {:?}", k.time),
                 );
             }
             if i > 0 && k.time <= keys[i - 1].time {
@@ -82,7 +82,7 @@ impl Keyframes {
                     "time",
                     Some(i),
                     format!(
-                        "key times must be strictly increasing: {} s follows {} s",
+                        "key times must be strictly increasing: {:?} s follows {:?} s",
                         k.time,
                         keys[i - 1].time
                     ),

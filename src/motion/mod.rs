@@ -75,14 +75,14 @@ pub enum MotionError {
         /// The presets there are.
         presets: Vec<&'static str>,
     },
-    #[error("{path}: cannot read motion file: {source}")]
+    // The reason is in the message and not a `#[source]`: the error chain would print it twice.
+    #[error("{path}: cannot read motion file: {error}")]
     /// A motion file that cannot be read.
     Io {
         /// The file.
         path: PathBuf,
-        #[source]
         /// Why.
-        source: std::io::Error,
+        error: std::io::Error,
     },
     #[error("{path}:{line}:{col}: {msg}")]
     /// A motion file that is not valid RON.
@@ -211,9 +211,9 @@ impl Motion {
                         presets: PRESETS.to_vec(),
                     });
                 }
-                let text = std::fs::read_to_string(path).map_err(|source| MotionError::Io {
+                let text = std::fs::read_to_string(path).map_err(|error| MotionError::Io {
                     path: path.to_path_buf(),
-                    source,
+                    error,
                 })?;
                 Self::from_ron(path, &text, anchor)
             }

@@ -3,6 +3,8 @@
 
 use std::time::Duration;
 
+pub mod tempo;
+
 /// Entity paths of the stats every solver reports (see README, "Entity paths"); a solver's own
 /// stats are named where it sets them.
 pub mod paths {
@@ -37,7 +39,10 @@ pub mod paths {
     pub const STEP_MS: &str = "/stats/step_ms";
     /// Frames dropped so far because the logger fell behind (live only).
     pub const DROPPED_FRAMES: &str = "/stats/dropped_frames";
-    /// The split threshold in force, m²/s².
+    /// Simulated seconds per wall second over the last second of frames: 1 is live, under 1
+    /// slow motion (in a recording: how fast the run went). See [`super::tempo`].
+    pub const REALTIME_FACTOR: &str = "/stats/realtime_factor";
+    /// The split threshold in force, N·m·kg⁻¹.
     pub const SPLIT_THRESHOLD: &str = "/params/split_threshold";
     /// The merge velocity threshold in force, m/s.
     pub const MERGE_VELOCITY: &str = "/params/merge_velocity";
@@ -131,7 +136,7 @@ pub struct AdaptEvent {
     pub sub_gcs: std::ops::Range<u32>,
     /// World position of the coarse node.
     pub position: [f64; 3],
-    /// |a|·r of the coarse node when it happened (the split trigger), m²/s².
+    /// |a|·r of the coarse node when it happened (the split trigger), N·m·kg⁻¹.
     pub accel_radius: f64,
     /// Largest relative speed among the sub-nodes (the merge trigger), m/s.
     pub rel_velocity: f64,

@@ -544,10 +544,10 @@ fn describe_event(out: &mut String, e: &AdaptEvent) {
         e.time
     );
     let _ = match e.kind {
-        EventKind::Split => write!(out, "|a|·r = {:.4} m²/s²", e.accel_radius),
+        EventKind::Split => write!(out, "|a|·r = {:.4} N·m·kg⁻¹", e.accel_radius),
         EventKind::Merge => write!(
             out,
-            "max relative velocity = {:.4} m/s (|a|·r = {:.4} m²/s²)",
+            "max relative velocity = {:.4} m/s (|a|·r = {:.4} N·m·kg⁻¹)",
             e.rel_velocity, e.accel_radius
         ),
         EventKind::GuideInsert | EventKind::GuideRemove => Ok(()),

@@ -18,8 +18,12 @@ pub const DEFAULT_RRD: &str = "wisptree.rrd";
 pub const DEFAULT_CONNECT_URL: &str = rerun::DEFAULT_CONNECT_URL;
 /// The application id of every recording.
 pub const APP_ID: &str = "wisptree";
-/// The port a spawned viewer listens on (Rerun's default).
+/// The port a spawned viewer listens on (Rerun's default), unless [`VIEWER_PORT_ENV`] says
+/// another.
 const VIEWER_PORT: u16 = 9876;
+/// The environment variable that moves the spawned viewer to another port (the tests use a
+/// free one, so that a viewer already running on 9876 does not change what they see).
+pub const VIEWER_PORT_ENV: &str = "WISPTREE_VIEWER_PORT";
 /// How long a spawned viewer may take to listen before it is given up and the run records to
 /// a file instead (a viewer that cannot open a window dies within a second or two).
 pub const VIEWER_START_TIMEOUT: Duration = Duration::from_secs(5);
@@ -375,12 +379,13 @@ fn wait_listening(addr: SocketAddr, timeout: Duration) -> anyhow::Result<()> {
 /// none. A viewer that exits, or does not listen within [`VIEWER_START_TIMEOUT`] (no display,
 /// say), is stopped and reaped.
 fn start_viewer() -> Result<(String, &'static str), String> {
-    let addr = SocketAddr::from(([127, 0, 0, 1], VIEWER_PORT));
-    let url = format!("rerun+http://127.0.0.1:{VIEWER_PORT}/proxy");
+    let port = viewer_port()?;
+    let addr = SocketAddr::from(([127, 0, 0, 1], port));
+    let url = format!("rerun+http://127.0.0.1:{port}/proxy");
     if TcpStream::connect_timeout(&addr, Duration::from_millis(300)).is_ok() {
         return Ok((url, "viewer already running"));
     }
-    let mut child = spawn_viewer_process()?;
+    let mut child = spawn_viewer_process(port)?;
     let started = Instant::now();
     let mut exited: Option<std::process::ExitStatus> = None;
     loop {
@@ -412,13 +417,26 @@ fn start_viewer() -> Result<(String, &'static str), String> {
     }
 }
 
+/// [`VIEWER_PORT`], or the port [`VIEWER_PORT_ENV`] gives.
+fn viewer_port() -> Result<u16, String> {
+    match std::env::var(VIEWER_PORT_ENV) {
+        Err(_) => Ok(VIEWER_PORT),
+        Ok(s) => s
+            .trim()
+            .parse()
+            .ok()
+            .filter(|&p| p != 0)
+            .ok_or_else(|| format!("{VIEWER_PORT_ENV}={s} is not a port (1 to 65535)")),
+    }
+}
+
 /// `rerun --port 9876 …` as Rerun's own `spawn` runs it, in its own process group so that it
 /// can be stopped with whatever it forked.
-fn spawn_viewer_process() -> Result<Child, String> {
+fn spawn_viewer_process(port: u16) -> Result<Child, String> {
     use std::os::unix::process::CommandExt as _;
     Command::new("rerun")
         .stdin(Stdio::null())
-        .arg(format!("--port={VIEWER_PORT}"))
+        .arg(format!("--port={port}"))
         .arg("--memory-limit=75%")
         .arg("--expect-data-soon")
         .process_group(0)

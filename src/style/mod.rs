@@ -320,13 +320,13 @@ fn check(ok: bool, field: &str, msg: impl FnOnce() -> String) -> Result<(), Inva
 
 fn positive(v: f64, field: &str) -> Result<(), Invalid> {
     check(v.is_finite() && v > 0.0, field, || {
-        format!("must be a positive number, got {v}")
+        format!("must be a positive number, got {v:?}")
     })
 }
 
 fn non_negative(v: f64, field: &str) -> Result<(), Invalid> {
     check(v.is_finite() && v >= 0.0, field, || {
-        format!("must be zero or positive, got {v}")
+        format!("must be zero or positive, got {v:?}")
     })
 }
 
@@ -435,18 +435,18 @@ fn validate_sim(style: &Style) -> Result<(), Invalid> {
         "sim.angle_threshold",
         || {
             format!(
-                "must be between 0 and 180 degrees, got {}",
+                "must be between 0 and 180 degrees, got {:?}",
                 s.angle_threshold
             )
         },
     )?;
     positive(s.dt, "sim.dt")?;
     check(s.dt <= 0.1, "sim.dt", || {
-        format!("a step longer than 0.1 s is not stable, got {}", s.dt)
+        format!("a step longer than 0.1 s is not stable, got {:?}", s.dt)
     })?;
     check(s.friction * s.dt < 1.0, "sim.friction", || {
         format!(
-            "friction α·dt must be < 1 so friction never reverses a relative motion (AWT §4.2); α = {}, dt = {} gives {}",
+            "friction α·dt must be < 1 so friction never reverses a relative motion (AWT §4.2); α = {:?}, dt = {:?} gives {:?}",
             s.friction,
             s.dt,
             s.friction * s.dt
@@ -461,12 +461,12 @@ fn validate_sim(style: &Style) -> Result<(), Invalid> {
     non_negative(s.contact_epsilon, "sim.contact_epsilon")?;
     non_negative(s.settle, "sim.settle")?;
     check(s.settle <= 60.0, "sim.settle", || {
-        format!("at most 60 s of settling, got {}", s.settle)
+        format!("at most 60 s of settling, got {:?}", s.settle)
     })?;
     check(
         s.accel_smoothing > 0.0 && s.accel_smoothing <= 1.0,
         "sim.accel_smoothing",
-        || format!("must be in (0, 1], got {}", s.accel_smoothing),
+        || format!("must be in (0, 1], got {:?}", s.accel_smoothing),
     )?;
     finite3(&s.wind.velocity, "sim.wind.velocity")?;
     non_negative(s.wind.gust, "sim.wind.gust")?;

@@ -82,7 +82,7 @@ fn check(ok: bool, field: &str, msg: impl FnOnce() -> String) -> Result<(), Inva
 
 fn in_range(v: f32, lo: f32, hi: f32, field: &str) -> Result<(), Invalid> {
     check(v.is_finite() && v >= lo && v <= hi, field, || {
-        format!("must be between {lo} and {hi}, got {v}")
+        format!("must be between {lo} and {hi}, got {v:?}")
     })
 }
 

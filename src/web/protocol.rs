@@ -249,6 +249,11 @@ pub struct LiveState {
     pub params: ParamValues,
     /// The integration step, s (friction must keep α·dt < 1).
     pub dt: f64,
+    /// Simulated over wall seconds over the last second (1: live).
+    pub realtime_factor: f64,
+    /// The real-time factor when the running simulation cannot keep up (the page's state line
+    /// says "slow motion"); `null` when it keeps up or is paused.
+    pub slow_motion: Option<f64>,
     /// The models the page offers.
     pub models: Vec<String>,
     /// The motion presets the page offers.
@@ -281,9 +286,12 @@ impl SharedState {
     }
 
     /// Publishes the controls' values; the version moves only if one changed.
-    pub fn publish(&self, controls: Controls<'_>, sim_time: f64) {
+    pub fn publish(&self, controls: Controls<'_>, sim_time: f64, realtime_factor: f64) {
         let mut s = self.lock();
         s.sim_time = sim_time;
+        s.realtime_factor = realtime_factor;
+        s.slow_motion = (!controls.paused && realtime_factor < crate::report::tempo::SLOW_BELOW)
+            .then_some(realtime_factor);
         let changed = s.paused != controls.paused
             || s.model != controls.model
             || s.motion != controls.motion
@@ -437,17 +445,38 @@ mod tests {
             params: ParamValues::default(),
             dt: 0.01,
         };
-        s.publish(c, 0.0);
+        s.publish(c, 0.0, 1.0);
         let v = s.snapshot().version;
-        s.publish(c, 1.0);
+        s.publish(c, 1.0, 0.5);
         assert_eq!(s.snapshot().version, v);
         assert_eq!(s.snapshot().sim_time, 1.0);
-        s.publish(Controls { paused: true, ..c }, 1.0);
+        s.publish(Controls { paused: true, ..c }, 1.0, 1.0);
         assert_eq!(s.snapshot().version, v + 1);
         s.log("hello");
         assert_eq!(
             s.snapshot().log.back().map(|l| l.text.as_str()),
             Some("hello")
         );
+    }
+
+    #[test]
+    fn the_state_says_slow_motion_only_while_running_below_real_time() {
+        let s = SharedState::new(vec![], vec![]);
+        let c = Controls {
+            paused: false,
+            model: "guides",
+            motion: "shake",
+            params: ParamValues::default(),
+            dt: 0.01,
+        };
+        s.publish(c, 1.0, 0.4);
+        assert_eq!(s.snapshot().slow_motion, Some(0.4));
+        assert_eq!(s.snapshot().realtime_factor, 0.4);
+        // Keeping up (a paced run reads 1 within its sleeps' jitter): no slow motion.
+        s.publish(c, 2.0, 0.995);
+        assert_eq!(s.snapshot().slow_motion, None);
+        // Paused: nothing moves, so nothing is slow.
+        s.publish(Controls { paused: true, ..c }, 2.0, 0.1);
+        assert_eq!(s.snapshot().slow_motion, None);
     }
 }

@@ -10,6 +10,8 @@ use wisptree::motion::Motion;
 use wisptree::solver::awt::Simulation;
 use wisptree::style::{self, LoadedStyle, RawHair, RawStrand};
 
+pub mod shared;
+
 /// The repository root.
 pub fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
@@ -114,10 +116,4 @@ pub fn shipped(name: &str) -> (LoadedStyle, Arc<HairModel>) {
     let loaded = style::load(&path).unwrap_or_else(|e| panic!("{e}"));
     let model = HairModel::from_style(&loaded).unwrap_or_else(|e| panic!("{e}"));
     (loaded, Arc::new(model))
-}
-
-/// `../shared`, if present.
-pub fn shared() -> Option<PathBuf> {
-    let p = root().join("..").join("shared");
-    p.join("data").is_dir().then_some(p)
 }

@@ -8,6 +8,19 @@
 //!   repulsion, eq. 2) split onto the segment nodes (eq. 3);
 //! * [`resolve_body`] moves child nodes out of the body spheres (§4.3).
 //!
+//! The files, in the order a step uses them:
+//!
+//! * `mod.rs`: the inputs and outputs ([`SegmentsView`], [`ContactParams`], [`PairStats`]);
+//! * `collider.rs`: [`HairCollider`], one step's broad phase, narrow phase and response, on one
+//!   or two threads;
+//! * `grid.rs`: the broad phase, a uniform voxel grid of segment boxes;
+//! * `narrow.rs`: per-segment data, the cheap filters and the closest points of two segments;
+//! * `worker.rs`: the helper thread that shares the pair search;
+//! * `response.rs`: friction and repulsion from the contacts, split onto the nodes;
+//! * `body.rs`: the body spheres;
+//! * `reference.rs`: [`accumulate_brute_force`], the all-pairs reference the tests compare
+//!   the grid against.
+//!
 //! # Choices where the papers leave room
 //!
 //! * **Closest points in f64.** `parry3d` 0.25 is f32-only (`parry3d-f64` is a separate crate we do

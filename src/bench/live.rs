@@ -1,0 +1,367 @@
+//! `wisptree bench --live`: does every solver keep up with the wall clock, on every built-in
+//! style, motion preset and slider end a user can pick?
+//!
+//! Each row runs the whole pipeline as `wisptree run` does (simulation thread, strands, the
+//! logging thread into an in-memory recording that drops nothing; the render thread too in
+//! the rendering rows), unpaced, so its real-time factor says how much faster than the wall
+//! clock it could go: at 1 or more a live run keeps up, under 1 it is slow motion. Loading
+//! and settling before t = 0 are not counted; the rows' frames are.
+//!
+//! The rows:
+//! * every solver (`awt`, `layered`, `guides`) × style × motion preset, at the style's
+//!   defaults, rendering off;
+//! * the AWT under `shake` at the ends of the control page's split and merge sliders (read
+//!   from the page's own table, so the bench follows the page);
+//! * the AWT at the defaults with rendering on, on every style × motion: the render thread
+//!   competes for the same cores and skips images when it falls behind, as it does live
+//!   (never simulation frames).
+
+use std::time::Instant;
+
+use indicatif::{ProgressBar, ProgressStyle};
+
+use crate::app::{simulate_into, LoopOptions, StopSignal};
+use crate::scene::Scene;
+use crate::solver::SolverKind;
+use crate::stream::sink::Recording;
+use crate::style::builtin::StyleSource;
+
+use super::style_label;
+
+/// The solvers a live user can pick on the page (single-level is the AWT's §5.2 baseline,
+/// not a live model).
+pub const LIVE_SOLVERS: [SolverKind; 3] =
+    [SolverKind::Awt, SolverKind::Layered, SolverKind::Guides];
+/// The motion presets of the matrix (every preset that moves).
+pub const LIVE_MOTIONS: [&str; 5] = ["lean", "run", "jump", "shake", "stop"];
+/// The motion of the slider-end rows: the fastest, where low thresholds split the most.
+pub const SLIDER_MOTION: &str = "shake";
+
+/// One row of the matrix, as written to JSON under `"live"` (the key names are an interface).
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct LiveRow {
+    /// The solver's name.
+    pub solver: String,
+    /// The style's name.
+    pub style: String,
+    /// The motion preset.
+    pub motion: String,
+    /// The AWT's split threshold in force, N·m·kg⁻¹ (`null` for the other solvers).
+    pub split: Option<f64>,
+    /// The AWT's merge velocity threshold in force, m/s (`null` for the other solvers).
+    pub merge: Option<f64>,
+    /// Rendering on (the render thread competing for the cores).
+    pub render: bool,
+    /// Simulated seconds ÷ wall seconds over the row's frames.
+    pub realtime_factor: f64,
+    /// The 95th-percentile wall time of a frame, ms.
+    pub p95_frame_ms: f64,
+    /// Mean and largest active nodes after a frame (guides for `guides`, skeleton points for
+    /// `layered`).
+    pub mean_active: f64,
+    /// See `mean_active`.
+    pub max_active: u32,
+    /// Mean segment pairs in contact per step.
+    pub contacts_per_step: f64,
+    /// Simulated seconds of the row.
+    pub sim_seconds: f64,
+    /// Frames of the row.
+    pub frames: u64,
+    /// A frame's simulated length, ms (the factor's numerator per frame).
+    pub frame_ms: f64,
+}
+
+/// What one row runs.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LiveCase {
+    /// The solver.
+    pub solver: SolverKind,
+    /// Index into the styles.
+    pub style: usize,
+    /// The motion preset.
+    pub motion: &'static str,
+    /// Split threshold other than the style's.
+    pub split: Option<f64>,
+    /// Merge velocity other than the style's.
+    pub merge: Option<f64>,
+    /// Rendering on.
+    pub render: bool,
+}
+
+/// The slider ends of the page's split threshold and merge velocity: (split, merge) overrides.
+fn slider_ends() -> Vec<(Option<f64>, Option<f64>)> {
+    let spec = |name: &str| {
+        crate::web::PARAMS
+            .iter()
+            .find(|p| p.name == name)
+            .unwrap_or_else(|| panic!("the control page has a `{name}` slider"))
+    };
+    let (split, merge) = (spec("split_threshold"), spec("merge_velocity"));
+    vec![
+        (Some(split.min), None),
+        (Some(split.max), None),
+        (None, Some(merge.min)),
+        (None, Some(merge.max)),
+    ]
+}
+
+/// Every row of the matrix over `styles` styles, in the order they run.
+pub fn live_cases(styles: usize) -> Vec<LiveCase> {
+    let mut cases = Vec::new();
+    let plain = |solver, style, motion| LiveCase {
+        solver,
+        style,
+        motion,
+        split: None,
+        merge: None,
+        render: false,
+    };
+    for solver in LIVE_SOLVERS {
+        for style in 0..styles {
+            for motion in LIVE_MOTIONS {
+                cases.push(plain(solver, style, motion));
+            }
+        }
+    }
+    for style in 0..styles {
+        for (split, merge) in slider_ends() {
+            cases.push(LiveCase {
+                split,
+                merge,
+                ..plain(SolverKind::Awt, style, SLIDER_MOTION)
+            });
+        }
+    }
+    for style in 0..styles {
+        for motion in LIVE_MOTIONS {
+            cases.push(LiveCase {
+                render: true,
+                ..plain(SolverKind::Awt, style, motion)
+            });
+        }
+    }
+    cases
+}
+
+/// Runs the matrix: `seconds` simulated per row on `styles`, drawing `strands` strands.
+pub fn bench_live(
+    styles: &[StyleSource],
+    seconds: f64,
+    strands: usize,
+) -> anyhow::Result<Vec<LiveRow>> {
+    let cases = live_cases(styles.len());
+    let progress = ProgressBar::new(cases.len() as u64);
+    progress.set_style(
+        ProgressStyle::with_template(
+            "{msg:44} [{bar:30}] {pos}/{len} rows {elapsed_precise} (eta {eta})",
+        )
+        .expect("a valid progress template")
+        .progress_chars("=> "),
+    );
+    // Each style is read and its model built once; the rows share it.
+    let mut scenes = Vec::with_capacity(styles.len());
+    for s in styles {
+        progress.set_message(format!("loading {}", style_label(s)));
+        let scene = Scene::load_source(s.clone(), LIVE_MOTIONS[0], SolverKind::Awt)
+            .map_err(|e| e.context(format!("setting up style {}", style_label(s))))?;
+        scenes.push(scene);
+    }
+    let mut rows = Vec::with_capacity(cases.len());
+    for case in &cases {
+        let scene = &scenes[case.style];
+        progress.set_message(case_label(case, &scene.style_name()));
+        rows.push(run_case(scene, case, seconds, strands)?);
+        progress.inc(1);
+    }
+    progress.finish_and_clear();
+    Ok(rows)
+}
+
+fn case_label(case: &LiveCase, style: &str) -> String {
+    let mut s = format!("{} {style} {}", case.solver, case.motion);
+    if let Some(v) = case.split {
+        s.push_str(&format!(" split {v}"));
+    }
+    if let Some(v) = case.merge {
+        s.push_str(&format!(" merge {v}"));
+    }
+    if case.render {
+        s.push_str(" +render");
+    }
+    s
+}
+
+/// One row: the scene under the case's solver, motion and thresholds, through the pipeline.
+fn run_case(
+    base: &Scene,
+    case: &LiveCase,
+    seconds: f64,
+    strands: usize,
+) -> anyhow::Result<LiveRow> {
+    let mut scene = base.with_motion(case.motion)?.with_solver(case.solver);
+    let sim = &mut scene.loaded.style.sim;
+    if let Some(v) = case.split {
+        sim.split_threshold = v;
+    }
+    if let Some(v) = case.merge {
+        sim.merge_velocity = v;
+    }
+    let (split, merge) = match case.solver {
+        SolverKind::Awt | SolverKind::SingleLevel => {
+            (Some(sim.split_threshold), Some(sim.merge_velocity))
+        }
+        _ => (None, None),
+    };
+    let (rec, memory) = Recording::memory()?;
+    let opts = LoopOptions {
+        seconds: Some(seconds),
+        // Unpaced, and every frame logged: the factor says how fast it could go.
+        live: false,
+        watch: false,
+        keys: false,
+        progress: false,
+        strands,
+        render: case
+            .render
+            .then_some(crate::app::render_thread::DEFAULT_RENDER_SIZE),
+        render_skips_when_behind: true,
+        quiet: true,
+        web: None,
+    };
+    let t0 = Instant::now();
+    let summary = simulate_into(&scene, rec, &opts, &StopSignal::new())?;
+    drop(memory);
+    let tempo = &summary.tempo;
+    anyhow::ensure!(
+        tempo.frames > 0,
+        "{}: the run made no frame in {:.1} s",
+        case_label(case, &scene.style_name()),
+        t0.elapsed().as_secs_f64()
+    );
+    Ok(LiveRow {
+        solver: case.solver.name().to_owned(),
+        style: scene.style_name(),
+        motion: case.motion.to_owned(),
+        split,
+        merge,
+        render: case.render,
+        realtime_factor: tempo.realtime_factor(),
+        p95_frame_ms: tempo.frame_ms_quantile(0.95),
+        mean_active: summary.load.mean_active(),
+        max_active: summary.load.active_max,
+        contacts_per_step: summary.load.contacts_per_step(),
+        sim_seconds: tempo.sim_s,
+        frames: tempo.frames,
+        frame_ms: tempo.sim_s * 1e3 / tempo.frames as f64,
+    })
+}
+
+/// Prints every row, then the worst row of each solver, then the worst of all, last.
+pub fn print_live(rows: &[LiveRow], seconds: f64) {
+    println!(
+        "wisptree bench --live: {seconds} s simulated per row through the run pipeline \
+         (simulation, strands, logging; unpaced). Real-time factor = simulated ÷ wall seconds: \
+         1 or more keeps up live, under 1 is slow motion."
+    );
+    println!(
+        "{:<8} {:<12} {:<6} {:>7} {:>7} {:>6} {:>9} {:>9} {:>12} {:>11}",
+        "solver",
+        "style",
+        "motion",
+        "split",
+        "merge",
+        "render",
+        "realtime",
+        "p95 ms",
+        "active mean/max",
+        "contacts"
+    );
+    for r in rows {
+        print_row(r);
+    }
+    println!();
+    println!("worst row per solver:");
+    let mut solvers: Vec<&str> = Vec::new();
+    for r in rows {
+        if !solvers.contains(&r.solver.as_str()) {
+            solvers.push(&r.solver);
+        }
+    }
+    for s in solvers {
+        if let Some(w) = worst(rows.iter().filter(|r| r.solver == s)) {
+            print_row(w);
+        }
+    }
+    if let Some(w) = worst(rows.iter()) {
+        println!();
+        println!(
+            "worst of all: {} on {} under `{}`{}{}: ×{:.2} of real time{}",
+            w.solver,
+            w.style,
+            w.motion,
+            w.split.map_or(String::new(), |v| format!(", split {v}")),
+            if w.render { ", rendering" } else { "" },
+            w.realtime_factor,
+            if w.realtime_factor >= 1.0 {
+                " (keeps up)"
+            } else {
+                " (slow motion when live)"
+            }
+        );
+    }
+}
+
+fn worst<'a>(rows: impl Iterator<Item = &'a LiveRow>) -> Option<&'a LiveRow> {
+    rows.min_by(|a, b| a.realtime_factor.total_cmp(&b.realtime_factor))
+}
+
+fn print_row(r: &LiveRow) {
+    let opt = |v: Option<f64>| v.map_or_else(|| "-".to_owned(), |v| format!("{v}"));
+    println!(
+        "{:<8} {:<12} {:<6} {:>7} {:>7} {:>6} {:>8.2}x {:>9.1} {:>7.0}/{:<7} {:>11.0}",
+        r.solver,
+        r.style,
+        r.motion,
+        opt(r.split),
+        opt(r.merge),
+        if r.render { "on" } else { "off" },
+        r.realtime_factor,
+        r.p95_frame_ms,
+        r.mean_active,
+        r.max_active,
+        r.contacts_per_step
+    );
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_matrix_has_every_solver_style_and_motion_the_slider_ends_and_the_rendering_rows() {
+        let cases = live_cases(4);
+        assert_eq!(cases.len(), 3 * 4 * 5 + 4 * 4 + 4 * 5);
+        for solver in LIVE_SOLVERS {
+            for style in 0..4 {
+                for motion in LIVE_MOTIONS {
+                    assert!(cases.iter().any(|c| c.solver == solver
+                        && c.style == style
+                        && c.motion == motion
+                        && !c.render
+                        && c.split.is_none()
+                        && c.merge.is_none()));
+                }
+            }
+        }
+        let ends: Vec<_> = cases
+            .iter()
+            .filter(|c| c.split.is_some() || c.merge.is_some())
+            .collect();
+        assert!(ends
+            .iter()
+            .all(|c| c.solver == SolverKind::Awt && c.motion == "shake"));
+        assert!(ends.iter().any(|c| c.split == Some(0.05)));
+        assert!(ends.iter().any(|c| c.merge == Some(0.005)));
+        assert_eq!(cases.iter().filter(|c| c.render).count(), 20);
+    }
+}
