@@ -32,7 +32,9 @@
 //! helpers), `camera.rs`, `shading.rs`, `body.rs`, `cull.rs` (the body culling before
 //! binning), `raster.rs` (binning and depth buckets), `shadow/`, `point_colors.rs`, `tile/`
 //! (the tile's samples, its culling tests and the line rasteriser), `resolve.rs`, `stages.rs`
-//! (the stages' per-job functions), `finish.rs` (gather and postfilter), `output.rs` (the image and its encodings), `scene_16k.rs`, and this file.
+//! (the stages' per-job functions), `finish.rs` (gather and postfilter), `output.rs` (the
+//! image and its encodings), `scene_16k.rs`, and this file. The thread pool is
+//! [`crate::par`]'s.
 //!
 //! Tiles are independent and each is done by one thread, in a fixed order of segments, so the
 //! image is the same bit for bit whatever the number of threads. Every buffer belongs to the

@@ -28,7 +28,12 @@ pub(super) struct TileSetup<'a> {
 multiversion! {
     /// Renders tile `t`, which has hair, with worker `w`'s buffers into `out` (its resolved
     /// linear pixels); returns the nanoseconds spent rasterising and resolving.
-    pub(super) fn render_tile(w: &mut Worker, t: usize, f: &TileSetup, out: &mut [f32]) -> (u64, u64) {
+    pub(super) fn render_tile(
+        w: &mut Worker,
+        t: usize,
+        f: &TileSetup,
+        out: &mut [f32],
+    ) -> (u64, u64) {
         let r0 = Instant::now();
         let mut layer = f.layers[t].lock().unwrap_or_else(|e| e.into_inner());
         let (first, second) = (f.halves[0].tile(t), f.halves[1].tile(t));
@@ -77,7 +82,12 @@ multiversion! {
 
 multiversion! {
     /// [`raster::HalfBins::fill`].
-    pub(super) fn fill_half(b: &mut raster::HalfBins, verts: &[ScreenVertex], colors: &[u32], grid: &Grid) {
+    pub(super) fn fill_half(
+        b: &mut raster::HalfBins,
+        verts: &[ScreenVertex],
+        colors: &[u32],
+        grid: &Grid,
+    ) {
         b.fill(verts, colors, grid);
     }
 }
@@ -109,7 +119,8 @@ multiversion! {
     ) {
         for s in range {
             let (a, b) = (strands.offsets[s] as usize, strands.offsets[s + 1] as usize);
-            shade.strand(s, &strands.points[a..b], a, &needed[a..b], &mut colors[a - base..b - base]);
+            let out = &mut colors[a - base..b - base];
+            shade.strand(s, &strands.points[a..b], a, &needed[a..b], out);
         }
     }
 }

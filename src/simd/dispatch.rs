@@ -59,7 +59,11 @@ pub fn avx2_allowed(level: Level) -> bool {
 /// AVX2 and chosen by `level` (see the module docs). With a type parameter `<I: Bound>`, the
 /// body is instantiated with [`Avx2`] and [`Portable`] respectively.
 macro_rules! multiversion {
-    ($(#[$m:meta])* $vis:vis fn $name:ident<$I:ident: $bound:path>($($arg:ident: $ty:ty),* $(,)?) $(-> $ret:ty)? $body:block) => {
+    (
+        $(#[$m:meta])*
+        $vis:vis fn $name:ident<$I:ident: $bound:path>($($arg:ident: $ty:ty),* $(,)?)
+        $(-> $ret:ty)? $body:block
+    ) => {
         $(#[$m])*
         $vis fn $name(level: $crate::simd::Level, $($arg: $ty),*) $(-> $ret)? {
             #[inline(always)]
@@ -79,7 +83,10 @@ macro_rules! multiversion {
             body::<$crate::simd::dispatch::Portable>($($arg),*)
         }
     };
-    ($(#[$m:meta])* $vis:vis fn $name:ident($($arg:ident: $ty:ty),* $(,)?) $(-> $ret:ty)? $body:block) => {
+    (
+        $(#[$m:meta])*
+        $vis:vis fn $name:ident($($arg:ident: $ty:ty),* $(,)?) $(-> $ret:ty)? $body:block
+    ) => {
         $(#[$m])*
         $vis fn $name(level: $crate::simd::Level, $($arg: $ty),*) $(-> $ret)? {
             #[inline(always)]
