@@ -24,6 +24,8 @@
 //! motion      head and body motion
 //! model       the multiresolution GC hierarchy, built once from a style
 //! style       the RON schema, validation, generation and import
+//! par         the one thread pool: nothing spawned or allocated per job
+//! simd        processor-specific code, each operation with a portable twin
 //! ```
 //!
 //! Solvers know nothing of Rerun; `stream` does no physics.
@@ -36,10 +38,12 @@ pub mod experiment;
 pub mod frame;
 pub mod model;
 pub mod motion;
+pub mod par;
 pub mod pipeline;
 pub mod render;
 pub mod report;
 pub mod scene;
+pub mod simd;
 pub mod solver;
 pub mod stream;
 pub mod style;

@@ -25,6 +25,9 @@ const LAYERS: &[&str] = &[
     "motion",
     "model",
     "style",
+    // Below everything that uses them, and using nothing of wisptree's.
+    "par",
+    "simd",
 ];
 
 /// Imports that point up today, as (file, the module above it that the file uses). Issue 26 §1,

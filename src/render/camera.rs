@@ -171,3 +171,11 @@ pub fn bounds(points: &[[f32; 3]]) -> ([f32; 3], [f32; 3]) {
 /// The default viewing direction (eye → scene): a three-quarter view of the face from its
 /// left and a little above, so that the face, the side and the hair over the shoulder show.
 pub const DEFAULT_VIEW: [f32; 3] = [-0.55, -0.2, -1.0];
+
+/// A strand point on screen: sample coordinates and view depth.
+#[derive(Debug, Clone, Copy, Default)]
+pub(crate) struct ScreenVertex {
+    pub x: f32,
+    pub y: f32,
+    pub z: f32,
+}

@@ -21,9 +21,20 @@
 //! stages' jobs share rounds on the thread pool ([`Renderer::render`]), so each stage's time
 //! is its share of the work done, of the frame's wall time: on one thread, the time it took.
 //!
-//! The hot loops are compiled twice, for the baseline x86-64 and for AVX2, and chosen at run
-//! time (`pool::multiversion!`); no fused multiply-add is enabled, so both give the same
-//! pixels.
+//! The hot loops are compiled twice, for the baseline processor and for AVX2, and the tile
+//! pass's vector operations (the window blend, the block depth compares) exist as intrinsics
+//! and as portable twins, all in [`crate::simd`]. The renderer's [`Level`] chooses
+//! ([`crate::simd::level`]: AVX2 where the processor has it, unless `WISPTREE_SIMD=off`;
+//! [`Renderer::with_simd_level`] for a test). No fused multiply-add is enabled, so every level
+//! gives the same pixels, bit for bit.
+//!
+//! The files, bottom up (a file uses only those above it in this list): `num.rs` (numeric
+//! helpers), `camera.rs`, `shading.rs`, `body.rs`, `cull.rs` (the body culling before
+//! binning), `raster.rs` (binning and depth buckets), `shadow/`, `point_colors.rs`, `tile/`
+//! (the tile's samples, its culling tests and the line rasteriser), `resolve.rs`, `stages.rs`
+//! (the stages' per-job functions), `finish.rs` (gather and postfilter), `output.rs` (the
+//! image and its encodings), `scene_16k.rs`, and this file. The thread pool is
+//! [`crate::par`]'s.
 //!
 //! Tiles are independent and each is done by one thread, in a fixed order of segments, so the
 //! image is the same bit for bit whatever the number of threads. Every buffer belongs to the
@@ -32,30 +43,39 @@
 
 pub mod body;
 pub mod camera;
+mod cull;
+mod finish;
+mod num;
+mod output;
 mod point_colors;
-mod pool;
 pub mod raster;
 pub mod resolve;
 pub mod scene_16k;
 pub mod shading;
 pub mod shadow;
+mod stages;
 mod tile;
 
-use std::path::Path;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::Mutex;
 use std::time::{Duration, Instant};
 
 pub use crate::style::RenderParams;
 pub use camera::{bounds, Camera};
+pub use output::{encode_jpeg, encode_jpeg_into, write_png, Image};
 pub use scene_16k::{bench_render, zhang_16k_body, zhang_16k_strands, RenderBench};
 pub use shading::{kajiya_kay_diffuse, kajiya_kay_specular};
 pub use shadow::{eq1_opacity, ShadowMaps, MAPS};
 
 use crate::frame::{BodyBuf, StrandBuf};
-use camera::{normalize, View};
-use raster::{Bins, Grid, ScreenVertex, TILE};
+use crate::par::{split_parts, Pool};
+use crate::simd::Level;
+use camera::{normalize, ScreenVertex, View};
+use raster::{Bins, Grid, TILE};
 use shading::{srgb3_to_linear, HairShader};
+use stages::{
+    count_half, fill_half, project_points, render_tile, shade_strands, split_by_strands, TileSetup,
+};
 use tile::TileBuf;
 
 /// Largest image side accepted, pixels.
@@ -67,25 +87,6 @@ pub struct RenderInput<'a> {
     pub strands: &'a StrandBuf,
     /// Spheres and scalp ellipsoid as posed.
     pub body: &'a BodyBuf,
-}
-
-/// An 8-bit sRGB image, row-major, 3 bytes per pixel.
-#[derive(Debug, Clone, Default, PartialEq)]
-pub struct Image {
-    /// Pixels per row.
-    pub width: u32,
-    /// Rows.
-    pub height: u32,
-    /// `width × height × 3` bytes.
-    pub rgb: Vec<u8>,
-}
-
-impl Image {
-    /// The (r, g, b) of pixel (x, y).
-    pub fn pixel(&self, x: u32, y: u32) -> [u8; 3] {
-        let o = ((y * self.width + x) * 3) as usize;
-        [self.rgb[o], self.rgb[o + 1], self.rgb[o + 2]]
-    }
 }
 
 /// Each stage's share of the last frame's wall-clock time (its share of the work done by all
@@ -158,7 +159,9 @@ pub struct Renderer {
     width: u32,
     height: u32,
     grid: Grid,
-    pool: pool::Pool,
+    pool: Pool,
+    /// The instruction set of the hot loops ([`Renderer::with_simd_level`]).
+    level: Level,
     maps: ShadowMaps,
     verts: Vec<ScreenVertex>,
     /// Per strand point, its packed colour ([`point_colors`]).
@@ -166,7 +169,7 @@ pub struct Renderer {
     /// Per strand point, whether a binned segment uses it (1) or not (0).
     needed: Vec<u8>,
     /// Per tile, its body as cast before binning.
-    layers: Vec<Mutex<tile::BodyLayer>>,
+    layers: Vec<Mutex<cull::BodyLayer>>,
     /// Each tile's farthest body depth (from `layers`), for binning.
     far: Vec<f32>,
     bins: Bins,
@@ -218,7 +221,7 @@ impl Renderer {
             height as usize,
             params.supersampling as usize,
         );
-        let pool = pool::Pool::new(threads)?;
+        let pool = Pool::new(threads)?;
         let workers = (0..pool.workers())
             .map(|_| {
                 Mutex::new(Worker {
@@ -241,6 +244,7 @@ impl Renderer {
             height,
             grid,
             pool,
+            level: crate::simd::level(),
             verts: Vec::new(),
             colors: Vec::new(),
             needed: Vec::new(),
@@ -259,6 +263,20 @@ impl Renderer {
             hairy: Vec::new(),
             strand_colors: Vec::new(),
         })
+    }
+
+    /// The renderer, its hot loops run at `level` rather than at [`crate::simd::level`] (the
+    /// process-wide choice): for a test that compares the AVX2 build with the portable one.
+    /// [`Level::Avx2`] on a processor without AVX2 runs the portable build.
+    pub fn with_simd_level(mut self, level: Level) -> Renderer {
+        self.level = level;
+        self.maps.level = level;
+        self
+    }
+
+    /// The instruction set of the hot loops.
+    pub fn simd_level(&self) -> Level {
+        self.level
     }
 
     /// The parameters in force.
@@ -365,7 +383,7 @@ impl Renderer {
     }
 
     /// Round 1: every strand point to the light frame (and their bounds) and to the screen,
-    /// and the body cast into every tile's [`tile::BodyLayer`] (runs of tiles); then the maps
+    /// and the body cast into every tile's [`cull::BodyLayer`] (runs of tiles); then the maps
     /// are spread over the points' bounds.
     fn transform(&mut self, strands: &StrandBuf, view: &View, light: [f32; 3]) {
         // Every vertex is written below: resized, not cleared.
@@ -375,8 +393,9 @@ impl Renderer {
         self.layers.resize_with(nt, Default::default);
         let frame = self.maps.light_frame(&strands.points, light);
         let screen = split_by_strands::<_, CHUNKS>(&mut self.verts, &strands.offsets);
-        let runs = pool::split_parts::<_, CHUNKS>(&mut self.layers, |c| (c + 1) * nt / CHUNKS);
+        let runs = split_parts::<_, CHUNKS>(&mut self.layers, |c| (c + 1) * nt / CHUNKS);
         let (grid, prims, workers, ns) = (self.grid, &self.prims, &self.workers, &self.stage_ns);
+        let level = self.level;
         let (n_light, n_screen) = (shadow::LightFrame::CHUNKS, CHUNKS);
         let job = |k: usize, i: usize| {
             if i < n_light {
@@ -387,7 +406,7 @@ impl Renderer {
                         .lock()
                         .unwrap_or_else(|e| e.into_inner());
                     let (first, ref mut out) = *g;
-                    project_points(view, &strands.points[first..first + out.len()], out);
+                    project_points(level, view, &strands.points[first..first + out.len()], out);
                 });
             } else {
                 timed(&ns[RASTER], || {
@@ -399,6 +418,7 @@ impl Renderer {
                         let origin = grid.origin(t0 + j);
                         let layer = layer.get_mut().unwrap_or_else(|e| e.into_inner());
                         tile::cast_layer(
+                            level,
                             &mut w.buf,
                             grid.tile_samples(),
                             origin,
@@ -432,7 +452,8 @@ impl Renderer {
         let deposits = self.maps.deposits(offsets);
         let parts = split_by_strands::<_, 2>(&mut self.needed, offsets);
         let (verts, grid, halves) = (&self.verts, &self.grid, &self.bins.halves);
-        let cull = tile::BodyCull { far: &self.far };
+        let cull = cull::BodyCull { far: &self.far };
+        let level = self.level;
         let ns = &self.stage_ns;
         let job = |i: usize| {
             // The deposits first: the longer jobs.
@@ -447,6 +468,7 @@ impl Renderer {
                 let (base, ref mut needed) = *g;
                 let strands = h * ns_strands / 2..(h + 1) * ns_strands / 2;
                 count_half(
+                    level,
                     &mut b,
                     verts,
                     offsets,
@@ -476,13 +498,13 @@ impl Renderer {
         let needed = &self.needed;
         let n_strands = strands.len();
         let parts = split_by_strands::<_, CHUNKS>(&mut self.colors, &strands.offsets);
-        let ns = &self.stage_ns;
+        let (ns, level) = (&self.stage_ns, self.level);
         let job = |c: usize| {
             timed(&ns[SHADING], || {
                 let mut g = parts[c].lock().unwrap_or_else(|e| e.into_inner());
                 let (base, ref mut colors) = *g;
                 let range = c * n_strands / CHUNKS..(c + 1) * n_strands / CHUNKS;
-                shade_strands(&shade, strands, range, base, needed, colors);
+                shade_strands(level, &shade, strands, range, base, needed, colors);
             });
         };
         self.pool.for_each(CHUNKS, &job);
@@ -505,7 +527,7 @@ impl Renderer {
             light,
         };
         let alpha = p.strand_alpha;
-        let grid = self.grid;
+        let (grid, level) = (self.grid, self.level);
         let nt = grid.tiles();
         let (workers, tiles, layers, ns) =
             (&self.workers, &self.tiles, &self.layers, &self.stage_ns);
@@ -534,7 +556,7 @@ impl Renderer {
             if i < 2 {
                 timed(&ns[RASTER], || {
                     let mut b = halves[i].lock().unwrap_or_else(|e| e.into_inner());
-                    fill_half(&mut b, verts, colors, &grid);
+                    fill_half(level, &mut b, verts, colors, &grid);
                 });
                 return;
             }
@@ -568,224 +590,18 @@ impl Renderer {
             half,
             alpha,
             resolve: &resolve,
+            level,
         };
         let hairy = &self.hairy;
         let job = |k: usize, i: usize| {
             let t = hairy[i].1 as usize;
             let mut w = workers[k].lock().unwrap_or_else(|e| e.into_inner());
             let mut out = tiles[t].lock().unwrap_or_else(|e| e.into_inner());
-            let (rn, sn) = render_tile(&mut w, t, &setup, &mut out);
+            let (rn, sn) = render_tile(level, &mut w, t, &setup, &mut out);
             ns[RASTER].fetch_add(rn, Ordering::Relaxed);
             ns[RESOLVE].fetch_add(sn, Ordering::Relaxed);
         };
         self.pool.for_each_worker(hairy.len(), &job);
-    }
-
-    /// Gathers the tiles' linear pixels into the frame, then postfilters and encodes it into
-    /// `out` in bands of rows, one job per band.
-    fn finish(&mut self, out: &mut Image) {
-        let (w, h) = (self.width as usize, self.height as usize);
-        self.linear.resize(w * h * 3, 0.0);
-        // The gather, in bands of whole rows of tiles, one job each.
-        let (grid, tiles) = (self.grid, &self.tiles);
-        let rows = pool::split_parts::<_, CHUNKS>(&mut self.linear, |c| {
-            ((c + 1) * grid.tiles_y / CHUNKS * TILE).min(h) * w * 3
-        });
-        let gather = |c: usize| {
-            let (t0, t1) = (c * grid.tiles_y / CHUNKS, (c + 1) * grid.tiles_y / CHUNKS);
-            let mut g = rows[c].lock().unwrap_or_else(|e| e.into_inner());
-            let (_, ref mut dst) = *g;
-            for ty in t0..t1 {
-                let y0 = (ty - t0) * TILE;
-                let ny = TILE.min(h - ty * TILE);
-                for tx in 0..grid.tiles_x {
-                    let tile = tiles[ty * grid.tiles_x + tx]
-                        .lock()
-                        .unwrap_or_else(|e| e.into_inner());
-                    let x0 = tx * TILE;
-                    let cols = TILE.min(w - x0);
-                    for y in 0..ny {
-                        let src = &tile[y * TILE * 3..(y * TILE + cols) * 3];
-                        let o = ((y0 + y) * w + x0) * 3;
-                        dst[o..o + cols * 3].copy_from_slice(src);
-                    }
-                }
-            }
-        };
-        let ns = &self.stage_ns[RESOLVE];
-        self.pool.for_each(CHUNKS, &|c| timed(ns, || gather(c)));
-        out.width = self.width;
-        out.height = self.height;
-        out.rgb.resize(w * h * 3, 0);
-        let bands = pool::split_parts::<_, CHUNKS>(&mut out.rgb, |c| (c + 1) * h / CHUNKS * w * 3);
-        let (linear, lut, s) = (&self.linear, &self.lut, self.params.postfilter);
-        let scratch = &self.band_scratch;
-        let job = |c: usize| {
-            let (y0, y1) = (c * h / CHUNKS, (c + 1) * h / CHUNKS);
-            let mut g = bands[c].lock().unwrap_or_else(|e| e.into_inner());
-            let (_, ref mut band) = *g;
-            let mut row = scratch[c].lock().unwrap_or_else(|e| e.into_inner());
-            resolve::postfilter_rows((linear, w, h), y0..y1, s, lut, band, &mut row);
-        };
-        let ns = &self.stage_ns[RESOLVE];
-        self.pool.for_each(CHUNKS, &|c| timed(ns, || job(c)));
-    }
-}
-
-/// What every tile of a frame shares.
-struct TileSetup<'a> {
-    grid: Grid,
-    layers: &'a [Mutex<tile::BodyLayer>],
-    halves: [&'a raster::HalfBins; 2],
-    key: raster::DepthKey,
-    half: f32,
-    alpha: f32,
-    resolve: &'a resolve::Resolve<'a>,
-}
-
-pool::multiversion! {
-    /// Renders tile `t`, which has hair, with worker `w`'s buffers into `out` (its resolved
-    /// linear pixels); returns the nanoseconds spent rasterising and resolving.
-    fn render_tile(w: &mut Worker, t: usize, f: &TileSetup, out: &mut [f32]) -> (u64, u64) {
-        let r0 = Instant::now();
-        let mut layer = f.layers[t].lock().unwrap_or_else(|e| e.into_inner());
-        let (first, second) = (f.halves[0].tile(t), f.halves[1].tile(t));
-        w.buf.reset_with(f.grid.tile_samples(), &mut layer);
-        let n_segs = raster::bucket_tile(
-            first,
-            second,
-            f.key,
-            &mut w.sorted,
-            &mut w.lows,
-            &mut w.keys,
-            &mut w.buckets,
-        );
-        tile::draw_buckets(
-            &mut w.buf,
-            &w.sorted[..n_segs],
-            &w.lows[..n_segs],
-            &w.buckets,
-            &mut w.order,
-            f.half,
-            f.alpha,
-        );
-        let r1 = Instant::now();
-        f.resolve.tile(&w.buf, f.grid.ss, out);
-        ((r1 - r0).as_nanos() as u64, r1.elapsed().as_nanos() as u64)
-    }
-}
-
-pool::multiversion! {
-    /// [`raster::HalfBins::count`].
-    #[allow(clippy::too_many_arguments)]
-    fn count_half(
-        b: &mut raster::HalfBins,
-        verts: &[ScreenVertex],
-        offsets: &[u32],
-        strands: std::ops::Range<usize>,
-        grid: &Grid,
-        reach: f32,
-        cull: &tile::BodyCull,
-        needed: (usize, &mut [u8]),
-    ) {
-        b.count(verts, offsets, strands, grid, reach, cull, needed);
-    }
-}
-
-pool::multiversion! {
-    /// [`raster::HalfBins::fill`].
-    fn fill_half(b: &mut raster::HalfBins, verts: &[ScreenVertex], colors: &[u32], grid: &Grid) {
-        b.fill(verts, colors, grid);
-    }
-}
-
-pool::multiversion! {
-    /// Projects `points` into `out`.
-    fn project_points(view: &View, points: &[[f32; 3]], out: &mut [ScreenVertex]) {
-        for (o, &pt) in out.iter_mut().zip(points) {
-            let sp = view.project(pt);
-            *o = ScreenVertex {
-                x: sp[0],
-                y: sp[1],
-                z: sp[2],
-            };
-        }
-    }
-}
-
-pool::multiversion! {
-    /// Shades the needed points of strands `range` into `colors`, which starts at point
-    /// `base` (`needed` covers every point).
-    fn shade_strands(
-        shade: &point_colors::PointShader,
-        strands: &StrandBuf,
-        range: std::ops::Range<usize>,
-        base: usize,
-        needed: &[u8],
-        colors: &mut [u32],
-    ) {
-        for s in range {
-            let (a, b) = (strands.offsets[s] as usize, strands.offsets[s + 1] as usize);
-            shade.strand(s, &strands.points[a..b], a, &needed[a..b], &mut colors[a - base..b - base]);
-        }
-    }
-}
-
-/// Splits `v`, one entry per strand point, into the points of K equal runs of strands (run c
-/// holds strands c·ns/K..(c+1)·ns/K, ns = `offsets.len()` − 1), each with the index of its
-/// first point and behind its own lock, so that K jobs can fill them at once.
-fn split_by_strands<'a, T, const K: usize>(
-    v: &'a mut [T],
-    offsets: &[u32],
-) -> [Mutex<(usize, &'a mut [T])>; K] {
-    let ns = offsets.len().saturating_sub(1);
-    pool::split_parts(v, |c| {
-        if ns == 0 {
-            0
-        } else {
-            offsets[(c + 1) * ns / K] as usize
-        }
-    })
-}
-
-/// Writes `img` as an 8-bit RGB PNG.
-pub fn write_png(img: &Image, path: &Path) -> std::io::Result<()> {
-    image::save_buffer_with_format(
-        path,
-        &img.rgb,
-        img.width,
-        img.height,
-        image::ExtendedColorType::Rgb8,
-        image::ImageFormat::Png,
-    )
-    .map_err(std::io::Error::other)
-}
-
-/// Encodes `img` as a baseline JPEG of `quality` (1–100, clamped).
-pub fn encode_jpeg(img: &Image, quality: u8) -> Vec<u8> {
-    let mut out = Vec::new();
-    encode_jpeg_into(img, quality, &mut out);
-    out
-}
-
-/// [`encode_jpeg`] into `out` (cleared first), reusing its allocation.
-///
-/// By the `jpeg-encoder` crate (with its AVX2 colour conversion and DCT where the processor
-/// has them): four times faster than the `image` crate's encoder, which took a tenth of a
-/// recording's time. Quality below 90 subsamples the chroma 2×2, as the `image` encoder did.
-pub fn encode_jpeg_into(img: &Image, quality: u8, out: &mut Vec<u8>) {
-    out.clear();
-    let enc = jpeg_encoder::Encoder::new(&mut *out, quality.clamp(1, 100));
-    // Encoding fails only on a size beyond 65,535 per side or a short pixel buffer, which an
-    // `Image` from the renderer (≤ 8192 per side) never has.
-    let (Ok(w), Ok(h)) = (u16::try_from(img.width), u16::try_from(img.height)) else {
-        return;
-    };
-    if enc
-        .encode(&img.rgb, w, h, jpeg_encoder::ColorType::Rgb)
-        .is_err()
-    {
-        out.clear();
     }
 }
 

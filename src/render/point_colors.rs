@@ -52,7 +52,7 @@ pub(crate) fn pack(c: [f32; 3]) -> u32 {
 /// operations only, so that it compiles to vector code. The same words as [`pack`].
 #[inline(always)]
 fn pack_lanes<const N: usize>(c: [[f32; N]; 3]) -> [u32; N] {
-    use super::raster::{mn, mx};
+    use super::num::{mn, mx};
     let max_value = ((1 << MANTISSA) - 1) as f32 / (1 << MANTISSA) as f32
         * f32::from_bits(((EXP_MAX - BIAS + 127) as u32) << 23);
     let cl = |x: [f32; N]| x.map(|v| mn(mx(v, 0.0), max_value));

@@ -5,21 +5,13 @@
 //! segments the AWT paper uses for antialiasing, Bertails et al. 2003, §5.1), each tile's own
 //! list with a stable radix sort, so the order is exact and the same on every run.
 
-use super::tile::BodyCull;
+use super::camera::ScreenVertex;
+use super::cull::BodyCull;
+use super::num::{floor_pos, mn, mx};
 
 /// Pixels per tile side. Tiles have no apron: the postfilter runs over the whole frame once
 /// every tile is resolved, so no sample is drawn twice.
 pub(crate) const TILE: usize = 32;
-/// Transmittance below which a sample counts as opaque (less than a 1/512 change in 8 bits).
-pub(crate) const OPAQUE: f32 = 1.0 / 512.0;
-
-/// A strand point on screen: sample coordinates and view depth.
-#[derive(Debug, Clone, Copy, Default)]
-pub(crate) struct ScreenVertex {
-    pub x: f32,
-    pub y: f32,
-    pub z: f32,
-}
 
 /// A segment as binned: its two end points and their colours (RGB9E5,
 /// [`super::point_colors`]), copied so that a tile reads its segments from one contiguous run
@@ -56,61 +48,6 @@ pub(crate) struct HalfBins {
     /// Per tile, `start[t]..start[t + 1]` in `items`.
     pub start: Vec<u32>,
     pub items: Vec<SegRec>,
-}
-
-/// min(a, b) for numbers (one `minss`; `f32::min` adds NaN fix-ups on x86).
-#[inline(always)]
-pub(crate) fn mn(a: f32, b: f32) -> f32 {
-    if a < b {
-        a
-    } else {
-        b
-    }
-}
-
-/// max(a, b) for numbers (one `maxss`).
-#[inline(always)]
-pub(crate) fn mx(a: f32, b: f32) -> f32 {
-    if a > b {
-        a
-    } else {
-        b
-    }
-}
-
-/// Largest argument [`floor_pos`] and [`ceil_pos`] tell apart (far beyond any image).
-const POS_MAX: f32 = 16_777_216.0;
-
-/// x clamped to [0, POS_MAX], NaN to 0 (one `maxss` and one `minss`: `f32::max` and
-/// `f32::min` add NaN fix-ups on x86).
-#[inline(always)]
-fn clamp_pos(x: f32) -> f32 {
-    let x = if x > 0.0 { x } else { 0.0 };
-    if x < POS_MAX {
-        x
-    } else {
-        POS_MAX
-    }
-}
-
-/// ⌊x⌋ for x ≥ 0 (negative x and NaN give 0, huge x 2²⁴), without a libm call.
-#[inline(always)]
-pub(crate) fn floor_pos(x: f32) -> usize {
-    // The clamped value is finite and in range, so the plain truncating conversion is exact
-    // (the saturating `as` costs several instructions here, on the rasteriser's hottest
-    // path); truncation is the floor for x ≥ 0.
-    let x = clamp_pos(x);
-    // SAFETY: x is in [0, 2²⁴], representable as an i32.
-    unsafe { x.to_int_unchecked::<i32>() as usize }
-}
-
-/// ⌈x⌉ for x ≥ 0 (negative x and NaN give 0, huge x 2²⁴), without a libm call.
-#[inline(always)]
-pub(crate) fn ceil_pos(x: f32) -> usize {
-    let x = clamp_pos(x);
-    // SAFETY: as in `floor_pos`.
-    let i = unsafe { x.to_int_unchecked::<i32>() };
-    (i + ((i as f32) < x) as i32) as usize
 }
 
 /// Tile grid of an image.

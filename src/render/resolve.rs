@@ -5,10 +5,11 @@
 
 use super::body::Prim;
 use super::camera::{add, dot, scale, View};
-use super::raster::{OPAQUE, TILE};
+use super::raster::TILE;
 use super::shading::LUT_SIZE;
 use super::shadow::ShadowMaps;
 use super::tile::TileBuf;
+use super::tile::OPAQUE;
 
 /// No primitive (primitive numbers are `u16`).
 const NONE: u32 = u32::MAX;

@@ -37,26 +37,36 @@ pub use forest::Forest;
 /// under `lean`; single-level runs need more and grow the list once while warming up).
 pub const CONTACTS_PER_FINEST_NODE: usize = 12;
 
-/// Threads the pair search uses by default: 2 on a machine with 3 or more cores, else 1, or
-/// what the environment variable `WISPTREE_THREADS` says (1 or 2). The results do not depend
-/// on it.
+/// Threads the pair search uses by default: 2 on any machine with 2 or more cores, else 1, or
+/// what the environment variable `WISPTREE_THREADS` says (1 or 2; larger numbers mean 2, and a
+/// value that is not a whole number is ignored, with a warning on standard error, once). Read
+/// once per process. The results do not depend on it.
 ///
-/// Why not 2 on a 2-core machine: `wisptree run` already keeps two threads busy (simulation and
-/// logging), and a helper preempted in the middle of its chunk makes the simulation wait for it:
-/// measured on the 2-core development machine, the 10 s Long curly recording took 7.4–7.6 s
-/// with the helper against 5.7 s without, in the same minute (and 3.9–4.1 against 4.1–4.3 s
-/// when the machine was quiet).
+/// 2 on a 2-core machine too (issue 25): on dense scenes (split threshold 0.05 under `shake`,
+/// thousands of active nodes) the pair search is nearly the whole step, and a second core
+/// halves it. Earlier this was 1 on 2 cores, because `wisptree run` keeps a logging thread busy
+/// and a helper preempted in the middle of its chunk made the simulation wait for it; the
+/// chunks are claimed from a shared counter (see [`collide::HairCollider`]), so a
+/// descheduled helper only costs the chunk it holds.
 pub fn default_threads() -> usize {
-    if let Some(t) = std::env::var("WISPTREE_THREADS")
-        .ok()
-        .and_then(|v| v.parse::<usize>().ok())
-    {
-        return t.clamp(1, 2);
-    }
-    match std::thread::available_parallelism().map_or(1, |n| n.get()) {
-        0..=2 => 1,
-        _ => 2,
-    }
+    static THREADS: OnceLock<usize> = OnceLock::new();
+    *THREADS.get_or_init(|| {
+        let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+        let default = if cores >= 2 { 2 } else { 1 };
+        match std::env::var("WISPTREE_THREADS") {
+            Ok(v) => match v.trim().parse::<usize>() {
+                Ok(t) => t.clamp(1, 2),
+                Err(_) => {
+                    eprintln!(
+                        "wisptree: WISPTREE_THREADS={v:?} is not a number of threads (1 or 2); \
+                         using {default}"
+                    );
+                    default
+                }
+            },
+            Err(_) => default,
+        }
+    })
 }
 
 /// Marks "no slot" (a root's parent).

@@ -98,6 +98,7 @@ impl Broad {
         let items = &self.items[..];
         let starts = &self.cell_start[..];
         let before = out.len();
+        let mut batched = Batched::new(p);
         const INDEX: u32 = (1 << MASK_SHIFT) - 1;
         for c in cells {
             let cell = &items[starts[c] as usize..starts[c + 1] as usize];
@@ -120,12 +121,11 @@ impl Broad {
                     }
                     stats.tested += 1;
                     // Cell lists are ascending: `a` has the lower index, as `contact` wants.
-                    if let Some(c) = contact(&pre[a], &pre[b], p) {
-                        out.push(c);
-                    }
+                    batched.push(pre, a, b, p, out);
                 }
             }
         }
+        batched.flush(pre, p, out);
         stats.in_contact = (out.len() - before) as u32;
         stats
     }
@@ -167,7 +167,7 @@ impl Broad {
             let (lo, hi) = b.bounds();
             bmin = bmin.inf(&lo);
             bmax = bmax.sup(&hi);
-            len_sum += s.len2.sqrt();
+            len_sum += s.lane.len2.sqrt();
         }
         let extent = bmax - bmin;
         let mut grid = GridInfo {

@@ -85,6 +85,7 @@
 
 use std::sync::{Mutex, RwLock};
 
+mod batch;
 mod body;
 mod collider;
 mod grid;
@@ -93,6 +94,7 @@ mod reference;
 mod response;
 mod worker;
 
+use batch::*;
 pub use body::*;
 pub use collider::*;
 pub use grid::*;

@@ -3,6 +3,7 @@
 use nalgebra::Vector3;
 
 use super::*;
+use crate::simd::pairs::Segment;
 
 #[inline]
 pub(super) fn widen(v: [f32; 3]) -> Vector3<f64> {
@@ -72,20 +73,16 @@ pub(super) fn near(a: &SegBox, b: &SegBox) -> bool {
 }
 
 /// One segment's data for the relative-motion test and the closest points, gathered once per
-/// step.
+/// step: the narrow phase's [`Segment`] (what the batched lanes read) and the rest the scalar
+/// routine needs.
 #[derive(Clone, Copy)]
 pub(super) struct SegPre {
-    pub(super) radius: f64,
+    /// Parent position `xp`, `d = xc − xp` and its squared length, the node velocities `vp`,
+    /// `vc`, the radius and the child's mass.
+    pub(super) lane: Segment,
+    pub(super) xc: Vector3<f64>,
     /// Index in the [`SegmentsView`].
     pub(super) seg: u32,
-    pub(super) xp: Vector3<f64>,
-    pub(super) xc: Vector3<f64>,
-    /// `xc − xp` and its squared length.
-    pub(super) d: Vector3<f64>,
-    pub(super) len2: f64,
-    pub(super) vp: Vector3<f64>,
-    pub(super) vc: Vector3<f64>,
-    pub(super) mass: f64,
 }
 
 impl SegPre {
@@ -100,16 +97,31 @@ impl SegPre {
         let (xp, xc) = (pos[parent], pos[child]);
         let d = xc - xp;
         SegPre {
-            radius: segs.radius[i],
-            seg: i as u32,
-            xp,
+            lane: Segment {
+                x: xp.into(),
+                d: d.into(),
+                len2: d.norm_squared(),
+                vp: vel[parent].into(),
+                vc: vel[child].into(),
+                radius: segs.radius[i],
+                mass: segs.child_mass[i],
+            },
             xc,
-            d,
-            len2: d.norm_squared(),
-            vp: vel[parent],
-            vc: vel[child],
-            mass: segs.child_mass[i],
+            seg: i as u32,
         }
+    }
+
+    #[inline(always)]
+    pub(super) fn xp(&self) -> Vector3<f64> {
+        Vector3::from(self.lane.x)
+    }
+    #[inline(always)]
+    pub(super) fn vp(&self) -> Vector3<f64> {
+        Vector3::from(self.lane.vp)
+    }
+    #[inline(always)]
+    pub(super) fn vc(&self) -> Vector3<f64> {
+        Vector3::from(self.lane.vc)
     }
 }
 
@@ -118,10 +130,11 @@ impl SegPre {
 #[inline(always)]
 pub(super) fn moving(a: &SegPre, b: &SegPre, eps2: f64) -> bool {
     // max(…) ≥ ε² as four independent comparisons (`f64::max` branches on NaN).
-    ((a.vp - b.vp).norm_squared() >= eps2)
-        | ((a.vp - b.vc).norm_squared() >= eps2)
-        | ((a.vc - b.vp).norm_squared() >= eps2)
-        | ((a.vc - b.vc).norm_squared() >= eps2)
+    let (avp, avc, bvp, bvc) = (a.vp(), a.vc(), b.vp(), b.vc());
+    ((avp - bvp).norm_squared() >= eps2)
+        | ((avp - bvc).norm_squared() >= eps2)
+        | ((avc - bvp).norm_squared() >= eps2)
+        | ((avc - bvc).norm_squared() >= eps2)
 }
 
 /// The contact of a pair that passed [`near`] and [`moving`], if the cylinders intersect. `a`
@@ -129,11 +142,13 @@ pub(super) fn moving(a: &SegPre, b: &SegPre, eps2: f64) -> bool {
 /// bit-identical pair forces.
 #[inline]
 pub(super) fn contact(a: &SegPre, b: &SegPre, p: &ContactParams) -> Option<Contact> {
-    let (xpa, xca, xpb, xcb) = (a.xp, a.xc, b.xp, b.xc);
-    let (vpa, vca, vpb, vcb) = (a.vp, a.vc, b.vp, b.vc);
+    let (seg_a, seg_b) = (a.seg, b.seg);
+    let (xpa, xca, xpb, xcb) = (a.xp(), a.xc, b.xp(), b.xc);
+    let (vpa, vca, vpb, vcb) = (a.vp(), a.vc(), b.vp(), b.vc());
+    let (a, b) = (&a.lane, &b.lane);
     let r = a.radius + b.radius;
-    let (s, t) = closest_params(&xpa, &a.d, a.len2, &xpb, &b.d, b.len2);
-    let (d1, d2) = (a.d, b.d);
+    let (d1, d2) = (Vector3::from(a.d), Vector3::from(b.d));
+    let (s, t) = closest_params(&xpa, &d1, a.len2, &xpb, &d2, b.len2);
     let p1 = xpa + d1 * s;
     let p2 = xpb + d2 * t;
     let delta = p1 - p2;
@@ -181,8 +196,8 @@ pub(super) fn contact(a: &SegPre, b: &SegPre, p: &ContactParams) -> Option<Conta
     }
 
     Some(Contact {
-        a: a.seg,
-        b: b.seg,
+        a: seg_a,
+        b: seg_b,
         s,
         t,
         friction: narrow(&friction),
@@ -274,8 +289,13 @@ pub(super) fn closest_params(
         ((b * f - c * e) / denom).clamp(0.0, 1.0)
     } else {
         // Parallel: seg 2's ends project on seg 1 at -c/a and (b - c)/a.
+        // The minima and maxima are written as comparisons (`f64::min` leaves the sign of a
+        // zero to the platform) so that the batched lanes (`crate::simd::pairs`) agree bit
+        // for bit.
         let (p, q) = (-c / a, (b - c) / a);
-        let (lo, hi) = (p.min(q).max(0.0), p.max(q).min(1.0));
+        let min_sel = |x: f64, y: f64| if y < x { y } else { x };
+        let max_sel = |x: f64, y: f64| if y > x { y } else { x };
+        let (lo, hi) = (max_sel(min_sel(p, q), 0.0), min_sel(max_sel(p, q), 1.0));
         if lo <= hi {
             0.5 * (lo + hi)
         } else {

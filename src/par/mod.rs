@@ -1,5 +1,9 @@
-//! A fixed set of worker threads that run one job at a time, started once per renderer so
-//! that rendering a frame spawns nothing and allocates nothing.
+//! The project's thread pool: a fixed set of worker threads that run one job at a time,
+//! started once by its owner (the renderer) so that a frame's jobs spawn nothing and, once
+//! warm, allocate nothing (a job is a borrowed closure, handed over by pointer).
+//!
+//! A module of its own, below the renderer and the solvers, so that both can use one pool
+//! without a solver importing the renderer. It uses nothing of wisptree's.
 
 use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -32,7 +36,7 @@ fn lock(m: &Mutex<State>) -> MutexGuard<'_, State> {
 }
 
 /// `n` workers: the calling thread (worker 0) and `n − 1` helper threads.
-pub(crate) struct Pool {
+pub struct Pool {
     shared: Arc<Shared>,
     threads: Vec<JoinHandle<()>>,
 }
@@ -55,9 +59,9 @@ impl Pool {
         for k in 1..n.max(1) {
             let s = shared.clone();
             let t = std::thread::Builder::new()
-                .name(format!("wisptree-render-{k}"))
+                .name(format!("wisptree-pool-{k}"))
                 .spawn(move || serve(&s, k))
-                .map_err(|e| format!("cannot start render thread {k}: {e}"))?;
+                .map_err(|e| format!("cannot start pool thread {k}: {e}"))?;
             threads.push(t);
         }
         Ok(Pool { shared, threads })
@@ -99,7 +103,7 @@ impl Pool {
         if let Err(e) = mine {
             std::panic::resume_unwind(e);
         }
-        assert!(!theirs, "a render worker thread panicked");
+        assert!(!theirs, "a pool worker thread panicked");
     }
 
     /// Runs `f(i)` for every item `i` in `0..n`, each worker taking the next item not yet
@@ -164,7 +168,7 @@ impl Drop for Pool {
 /// last one at most `v.len()`), each with the index of its first element and behind its own
 /// lock, so that K jobs can each fill one at once. An array, not a `Vec`: splitting allocates
 /// nothing.
-pub(crate) fn split_parts<T, const K: usize>(
+pub fn split_parts<T, const K: usize>(
     v: &mut [T],
     end: impl Fn(usize) -> usize,
 ) -> [Mutex<(usize, &mut [T])>; K] {
@@ -181,43 +185,12 @@ pub(crate) fn split_parts<T, const K: usize>(
 }
 
 /// Runs `f(0..n)` on `pool`, or on the calling thread when there is none.
-pub(crate) fn for_each_on(pool: Option<&Pool>, n: usize, f: &(dyn Fn(usize) + Sync)) {
+pub fn for_each_on(pool: Option<&Pool>, n: usize, f: &(dyn Fn(usize) + Sync)) {
     match pool {
         Some(p) => p.for_each(n, f),
         None => (0..n).for_each(f),
     }
 }
-
-/// Defines a function compiled twice, for the baseline processor and for AVX2, and choosing at
-/// run time (the check is one cached load).
-///
-/// The renderer's loops are plain scalar and `[f32; 4]` code; built for AVX2 the same code
-/// uses the three-operand VEX encoding and wider vectors, and the tile pass runs about 15 %
-/// faster. Fused multiply-add is not enabled, so both builds compute every value bit for bit
-/// alike and the image does not depend on the processor. What the body calls is compiled for
-/// AVX2 only where it is inlined, so the hot callees are `#[inline(always)]`.
-macro_rules! multiversion {
-    ($(#[$m:meta])* $vis:vis fn $name:ident($($arg:ident: $ty:ty),* $(,)?) $(-> $ret:ty)? $body:block) => {
-        $(#[$m])*
-        $vis fn $name($($arg: $ty),*) $(-> $ret)? {
-            #[inline(always)]
-            fn body($($arg: $ty),*) $(-> $ret)? $body
-            #[cfg(target_arch = "x86_64")]
-            {
-                #[target_feature(enable = "avx2")]
-                unsafe fn avx2($($arg: $ty),*) $(-> $ret)? {
-                    body($($arg),*)
-                }
-                if std::arch::is_x86_feature_detected!("avx2") {
-                    // SAFETY: the processor has AVX2, checked just above.
-                    return unsafe { avx2($($arg),*) };
-                }
-            }
-            body($($arg),*)
-        }
-    };
-}
-pub(crate) use multiversion;
 
 #[cfg(test)]
 mod split_tests {
