@@ -186,7 +186,7 @@ mod tests {
                 _ => (xa + rng.vec(0.03), rng.vec(0.02)),
             };
             let mut a = a;
-            if k % 8 == 5 && rng.next_u64() % 2 == 0 {
+            if k % 8 == 5 && rng.next_u64().is_multiple_of(2) {
                 a.lane.d = [0.0; 3];
                 a.lane.len2 = 0.0;
                 a.xc = xa;
