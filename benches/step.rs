@@ -197,6 +197,47 @@ fn single_level_interactions(c: &mut Criterion) {
     g.finish();
 }
 
+/// Interactions on the densest AWT the web page can ask for (issue 25): Short under `shake`
+/// with the split threshold at the slider's lowest, 0.05, after 2 s (about 3,600 active
+/// nodes, 380 k tested pairs, 255 k contacts), on one and two threads. `WISPTREE_SIMD=off`
+/// times the portable narrow phase.
+fn dense_interactions(c: &mut Criterion) {
+    let mut g = c.benchmark_group("stage");
+    g.sample_size(10)
+        .warm_up_time(Duration::from_millis(500))
+        .measurement_time(Duration::from_secs(3));
+    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("styles")
+        .join("short.ron");
+    let (loaded, model) =
+        wisptree::scene::load_model(&wisptree::style::builtin::StyleSource::File(path))
+            .expect("the style loads");
+    let model = Arc::new(model);
+    let motion = Motion::parse("shake", Point3::from(model.scalp_center)).expect("shake");
+    let mut sim = Simulation::from_style(model, &loaded.style, motion, false);
+    sim.params.split_threshold = 0.05;
+    let mut report = StepReport::default();
+    for _ in 0..200 {
+        sim.step(&mut report);
+    }
+    let cp = contact_params(&sim);
+    let s = &sim.slots;
+    let view = s.segs.view();
+    let mut force = s.force.clone();
+    for threads in [1, 2] {
+        let mut collider = HairCollider::new();
+        collider.set_threads(threads);
+        g.bench_function(
+            format!(
+                "short/shake_split0.05/interactions/{threads}_threads/{}",
+                wisptree::simd::level().name()
+            ),
+            |b| b.iter(|| black_box(collider.accumulate(&view, &s.pos, &s.vel, &cp, &mut force))),
+        );
+    }
+    g.finish();
+}
+
 /// `FrameBuilder::fill` (followers, 500 Catmull-Rom strands) and `Logger::log_frame` into a
 /// memory sink, on Long curly.
 fn display(c: &mut Criterion) {
@@ -245,5 +286,12 @@ fn display(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, step, stages, single_level_interactions, display);
+criterion_group!(
+    benches,
+    step,
+    stages,
+    single_level_interactions,
+    dense_interactions,
+    display
+);
 criterion_main!(benches);

@@ -2,6 +2,12 @@
 //! steps, end in the same state, bit for bit, as before the restructure. The hashes were
 //! recorded with the code of commit a2e422d (before the solver trait existed); a change to them
 //! means the simulation changed, which a refactor must not do.
+//!
+//! Re-recorded once since (issue 25): the hair–hair search now adds up each contact's share
+//! of the per-node loads (the response's load limiting) chunk by chunk of cells, and the
+//! chunks' sums in chunk order, instead of one running sum over all contacts; only the
+//! rounding of those sums changed. The same hashes come out on one thread or two and with
+//! `WISPTREE_SIMD=off`.
 
 use wisptree::scene::Scene;
 use wisptree::solver::{Solver, SolverKind};
@@ -69,6 +75,6 @@ fn single_level_short_under_run_is_bit_identical_to_before_the_restructure() {
     assert_eq!(h, SHORT_RUN_SINGLE, "got {h:#018x}");
 }
 
-const LONG_LEAN: u64 = 0x9763_9401_c8cf_db27;
-const SHORT_CURLY_SHAKE: u64 = 0x83fd_026a_03fd_7f76;
-const SHORT_RUN_SINGLE: u64 = 0x0088_b453_f88e_765c;
+const LONG_LEAN: u64 = 0xfda7_0a1e_8be1_f34d;
+const SHORT_CURLY_SHAKE: u64 = 0x047b_81e9_c86b_983e;
+const SHORT_RUN_SINGLE: u64 = 0x83b6_cfd4_4d3e_c5ff;

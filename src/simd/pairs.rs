@@ -238,8 +238,7 @@ fn kernel<V: Lanes>(batch: &PairBatch, p: &PairParams, out: &mut PairOut) {
     let kr = V::splat(p.repulsion);
     let thr2 = V::splat(p.cos2_threshold);
     let dtf = V::splat(p.dt_floor);
-    let (hit_all, mut rare_all) = (0u64, 0u64);
-    let mut hit_all = hit_all;
+    let (mut hit_all, mut rare_all) = (0u64, 0u64);
     let (a, b) = (&batch.a, &batch.b);
     let mut i = 0;
     while i < batch.len {
@@ -331,8 +330,8 @@ fn kernel<V: Lanes>(batch: &PairBatch, p: &PairParams, out: &mut PairOut) {
         let approach = dot(&dv, &n).neg();
         let push = kr.mul(m).mul(rsum.sub(d)).min_sel(m.mul(approach).div(dtf));
         let on = V::and(crossing, approach.gt(zero));
-        for k in 0..3 {
-            V::select(on, n[k].mul(push), zero).store(at_mut(&mut out.repulsion[k], i));
+        for (nk, rep) in n.iter().zip(out.repulsion.iter_mut()) {
+            V::select(on, nk.mul(push), zero).store(at_mut(rep, i));
         }
         s.store(at_mut(&mut out.s, i));
         t.store(at_mut(&mut out.t, i));

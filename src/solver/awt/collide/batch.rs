@@ -8,17 +8,27 @@ use crate::simd::pairs::{self, PairBatch, PairOut, PairParams, BATCH};
 use super::*;
 
 /// Queued pairs and the lanes' results; lives on the searching thread's stack (about 20 kB).
-pub(super) struct Batched {
+///
+/// Each contact found also adds its shares to the per-node loads of [`Response`] at once,
+/// while its data is still in the cache (a second pass over the contact list, tens of
+/// thousands of 48-byte entries, used to cost a tenth of the stage).
+pub(super) struct Batched<'a> {
     lanes: PairBatch,
     out: PairOut,
     /// The pairs of the lanes, as indices into the per-segment data.
     ids: [(u32, u32); BATCH],
     params: PairParams,
+    /// Per node slot: 1 / mass (see [`Broad`]).
+    inv_mass: &'a [f64],
+    /// Per node slot: the loads of this search's contacts.
+    loads: &'a mut [f64],
 }
 
-impl Batched {
-    pub(super) fn new(p: &ContactParams) -> Self {
+impl<'a> Batched<'a> {
+    pub(super) fn new(p: &ContactParams, inv_mass: &'a [f64], loads: &'a mut [f64]) -> Self {
         Batched {
+            inv_mass,
+            loads,
             lanes: PairBatch::default(),
             out: PairOut::default(),
             ids: [(0, 0); BATCH],
@@ -36,7 +46,7 @@ impl Batched {
     #[inline(always)]
     pub(super) fn push(
         &mut self,
-        pre: &[SegPre],
+        (boxes, pre): (&[SegBox], &[SegPre]),
         a: usize,
         b: usize,
         p: &ContactParams,
@@ -44,44 +54,75 @@ impl Batched {
     ) {
         self.ids[self.lanes.len()] = (a as u32, b as u32);
         if self.lanes.push(&pre[a].lane, &pre[b].lane) {
-            self.flush(pre, p, out);
+            self.flush((boxes, pre), p, out);
         }
     }
 
     /// Tests the queued pairs and appends their contacts to `out`, in queue order.
-    pub(super) fn flush(&mut self, pre: &[SegPre], p: &ContactParams, out: &mut Vec<Contact>) {
+    pub(super) fn flush(
+        &mut self,
+        (boxes, pre): (&[SegBox], &[SegPre]),
+        p: &ContactParams,
+        out: &mut Vec<Contact>,
+    ) {
         let n = self.lanes.len();
         if n == 0 {
             return;
         }
         pairs::narrow(&self.lanes, &self.params, &mut self.out);
-        self.emit(n, pre, p, out);
+        self.emit(n, (boxes, pre), p, out);
         self.lanes.clear();
     }
 
-    fn emit(&self, n: usize, pre: &[SegPre], p: &ContactParams, out: &mut Vec<Contact>) {
-        let o = &self.out;
-        let mut todo = o.hit | o.rare;
+    /// Adds a contact's shares to the loads of its four nodes: [`Response::record`], fed
+    /// from the per-segment data.
+    #[inline(always)]
+    fn record(&mut self, boxes: (&SegBox, &SegBox), m: f64, s: f64, t: f64) {
+        let (a, b) = boxes;
+        for (n, share) in [
+            (a.parent, 1.0 - s),
+            (a.child, s),
+            (b.parent, 1.0 - t),
+            (b.child, t),
+        ] {
+            self.loads[n as usize] += share * m * self.inv_mass[n as usize];
+        }
+    }
+
+    fn emit(
+        &mut self,
+        n: usize,
+        (boxes, pre): (&[SegBox], &[SegPre]),
+        p: &ContactParams,
+        out: &mut Vec<Contact>,
+    ) {
+        let mut todo = self.out.hit | self.out.rare;
         while todo != 0 {
+            let o = &self.out;
             let i = todo.trailing_zeros() as usize;
             todo &= todo - 1;
             debug_assert!(i < n);
             let (a, b) = self.ids[i];
             let (pa, pb) = (&pre[a as usize], &pre[b as usize]);
-            if o.rare >> i & 1 != 0 {
-                if let Some(c) = contact(pa, pb, p) {
-                    out.push(c);
+            let c = if o.rare >> i & 1 != 0 {
+                match contact(pa, pb, p) {
+                    Some(c) => c,
+                    None => continue,
                 }
             } else {
-                out.push(Contact {
+                Contact {
                     a: pa.seg,
                     b: pb.seg,
                     s: o.s[i],
                     t: o.t[i],
                     friction: [0, 1, 2].map(|k| o.friction[k][i] as f32),
                     repulsion: [0, 1, 2].map(|k| o.repulsion[k][i] as f32),
-                });
-            }
+                }
+            };
+            // The lighter child's mass, as `Response::record` takes it.
+            let m = pa.lane.mass.min(pb.lane.mass);
+            self.record((&boxes[a as usize], &boxes[b as usize]), m, c.s, c.t);
+            out.push(c);
         }
     }
 
@@ -91,7 +132,7 @@ impl Batched {
     pub(super) fn run_on(
         &mut self,
         level: crate::simd::Level,
-        pre: &[SegPre],
+        (boxes, pre): (&[SegBox], &[SegPre]),
         pairs_ab: &[(usize, usize)],
         p: &ContactParams,
         out: &mut Vec<Contact>,
@@ -102,7 +143,7 @@ impl Batched {
                 self.lanes.push(&pre[a].lane, &pre[b].lane);
             }
             pairs::narrow_on(level, &self.lanes, &self.params, &mut self.out);
-            self.emit(chunk.len(), pre, p, out);
+            self.emit(chunk.len(), (boxes, pre), p, out);
             self.lanes.clear();
         }
     }
@@ -186,7 +227,7 @@ mod tests {
                 _ => (xa + rng.vec(0.03), rng.vec(0.02)),
             };
             let mut a = a;
-            if k % 8 == 5 && rng.next_u64() % 2 == 0 {
+            if k % 8 == 5 && rng.next_u64().is_multiple_of(2) {
                 a.lane.d = [0.0; 3];
                 a.lane.len2 = 0.0;
                 a.xc = xa;
@@ -209,6 +250,18 @@ mod tests {
             out.push(b);
         }
         out
+    }
+
+    /// Node slots `2i` (parent) and `2i + 1` (child) for segment `i`.
+    fn boxes_of(pre: &[SegPre]) -> Vec<SegBox> {
+        (0..pre.len() as u32)
+            .map(|i| SegBox {
+                parent: 2 * i,
+                child: 2 * i + 1,
+                chain: i,
+                ..SegBox::default()
+            })
+            .collect()
     }
 
     fn bits(c: &Contact) -> [u64; 10] {
@@ -253,10 +306,13 @@ mod tests {
             if crate::simd::best_available() != Level::Portable {
                 levels.push(crate::simd::best_available());
             }
+            let boxes = boxes_of(&pre);
+            let inv_mass = vec![1.0; 2 * pre.len()];
             for level in levels {
-                let mut b = Batched::new(&p);
+                let mut loads = vec![0.0; 2 * pre.len()];
+                let mut b = Batched::new(&p, &inv_mass, &mut loads);
                 let mut out = Vec::new();
-                b.run_on(level, &pre, &idx, &p, &mut out);
+                b.run_on(level, (&boxes, &pre), &idx, &p, &mut out);
                 assert_eq!(out.len(), scalar.len(), "{level:?}, thr {thr}");
                 for (x, y) in out.iter().zip(&scalar) {
                     assert_eq!(bits(x), bits(y), "{level:?}, thr {thr}: {x:?} vs {y:?}");
@@ -277,7 +333,8 @@ mod tests {
             epsilon: 0.0,
             dt: 0.01,
         };
-        let mut b = Batched::new(&p);
+        let (inv_mass, mut loads) = (vec![1.0; 2 * pre.len()], vec![0.0; 2 * pre.len()]);
+        let mut b = Batched::new(&p, &inv_mass, &mut loads);
         let (mut rare, mut total) = (0, 0);
         for chunk in (0..4_096).collect::<Vec<_>>().chunks(BATCH) {
             for &k in chunk {

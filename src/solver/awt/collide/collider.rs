@@ -26,9 +26,11 @@ use super::*;
 /// [`CHUNKS`] runs of about equal work, and the caller and a helper thread (spawned once, then
 /// parked on a condition variable) claim them from an atomic counter until none is left. If the
 /// helper is slow to wake (the logging thread or another job holds the other core), the caller
-/// simply does more chunks, so sharing never costs much more than one thread. Loads and forces
-/// are then applied chunk by chunk in cell order, exactly the order of the one-thread search, so
-/// the forces are bit-identical whatever the thread count and whoever did which chunk. The
+/// simply does more chunks, so sharing never costs much more than one thread. One thread cuts
+/// the cells into the same chunks. Each chunk sums the loads of its own contacts as it finds
+/// them (on whichever thread searched it); the chunks' loads are then added, and the forces
+/// applied, chunk by chunk in cell order, so the forces are bit-identical whatever the thread
+/// count and whoever did which chunk. The
 /// helper works on buffers it keeps, so a warm step allocates nothing (rayon's injector would:
 /// see the module docs).
 pub struct HairCollider {
@@ -36,6 +38,9 @@ pub struct HairCollider {
     pub(super) contacts: Vec<Contact>,
     /// Per node slot: the load, then the repulsion scale (scratch of [`Response`]).
     pub(super) load: Vec<f64>,
+    /// Per chunk of the search and node slot: the loads of the chunk's contacts (the chunks
+    /// this thread searched).
+    pub(super) chunk_loads: Vec<f64>,
     /// Per node slot: 1 / mass, then the friction scale (scratch of [`Response`]).
     pub(super) inv_mass: Vec<f64>,
     pub(super) threads: usize,
@@ -74,11 +79,13 @@ impl HairCollider {
             cell_start: Vec::with_capacity(cells),
             items: Vec::with_capacity(ITEMS_PER_SEGMENT * segments),
             grid: GridInfo::default(),
+            inv_mass: Vec::with_capacity(nodes),
         };
         HairCollider {
             broad: Arc::new(RwLock::new(broad)),
             contacts: Vec::with_capacity(contacts),
             load: Vec::with_capacity(nodes),
+            chunk_loads: Vec::with_capacity(CHUNKS * nodes),
             inv_mass: Vec::with_capacity(nodes),
             threads: 1,
             helper: None,
@@ -93,7 +100,11 @@ impl HairCollider {
     pub fn set_threads(&mut self, threads: usize) {
         self.threads = threads.clamp(1, 2);
         if self.threads > 1 && self.helper.is_none() {
-            self.helper = Some(Helper::spawn(self.broad.clone(), self.contacts.capacity()));
+            self.helper = Some(Helper::spawn(
+                self.broad.clone(),
+                self.contacts.capacity(),
+                self.chunk_loads.capacity(),
+            ));
         }
     }
 
@@ -124,14 +135,16 @@ impl HairCollider {
     pub fn capacity_bytes(&self) -> usize {
         let b = read(&self.broad);
         let helper = self.helper.as_ref().map_or(0, |h| {
-            lock(&h.shared.job).contacts.capacity() * std::mem::size_of::<Contact>()
+            let job = lock(&h.shared.job);
+            job.contacts.capacity() * std::mem::size_of::<Contact>() + job.loads.capacity() * 8
         });
         b.boxes.capacity() * std::mem::size_of::<SegBox>()
             + b.pre.capacity() * std::mem::size_of::<SegPre>()
             + (b.lo.capacity() + b.hi.capacity()) * std::mem::size_of::<[u32; 3]>()
             + (b.cell_start.capacity() + b.items.capacity()) * 4
             + self.contacts.capacity() * std::mem::size_of::<Contact>()
-            + (self.load.capacity() + self.inv_mass.capacity()) * 8
+            + (self.load.capacity() + self.inv_mass.capacity() + self.chunk_loads.capacity()) * 8
+            + b.inv_mass.capacity() * 8
             + helper
     }
 
@@ -152,6 +165,7 @@ impl HairCollider {
             n < 1 << MASK_SHIFT,
             "too many segments for the cell lists: {n}"
         );
+        let nodes = force.len();
         {
             let mut b = write(&self.broad);
             b.boxes.clear();
@@ -159,57 +173,74 @@ impl HairCollider {
             b.pre.clear();
             b.pre.extend((0..n).map(|i| SegPre::new(segs, pos, vel, i)));
             b.build();
+            // As `Response::new` computes it: a slot's mass is its mass as a child.
+            b.inv_mass.clear();
+            b.inv_mass.resize(nodes, 0.0);
+            for i in 0..n {
+                b.inv_mass[segs.child[i] as usize] = 1.0 / segs.child_mass[i];
+            }
         }
         let eps2 = p.epsilon * p.epsilon;
         self.contacts.clear();
         let broad = read(&self.broad);
-        let ncells = broad.cell_start.len() - 1;
-        let mut response = Response::new(segs, force.len(), &mut self.inv_mass, &mut self.load);
+        let mut response = Response::new(segs, nodes, &mut self.inv_mass, &mut self.load);
         self.helper_contacts = 0;
-        let stats = if self.threads > 1 && n >= MIN_SEGMENTS_TO_SHARE {
-            let bounds = broad.chunk_bounds();
-            let helper = self
-                .helper
-                .as_ref()
-                .expect("set_threads started the helper");
-            helper.start(bounds, *p, self.helper_first);
-            // Claim chunks until none is left; the helper does the same, so if it is slow to
-            // wake (a busy machine) this thread simply does more of them.
-            let mut stats = PairStats::default();
-            let mut spans = [None; CHUNKS];
-            loop {
-                let k = helper.shared.next.fetch_add(1, Ordering::AcqRel);
-                if k >= CHUNKS {
-                    break;
+        // The search is cut into CHUNKS runs of cells whatever the thread count, and each
+        // chunk sums its own loads: the loads are then the chunks' sums added in chunk order,
+        // so they are the same bit for bit on one thread or two.
+        let bounds = broad.chunk_bounds();
+        let shared = self.threads > 1 && n >= MIN_SEGMENTS_TO_SHARE;
+        let helper = self.helper.as_ref().filter(|_| shared);
+        if let Some(h) = helper {
+            h.start(bounds, *p, self.helper_first);
+        }
+        if self.chunk_loads.len() != CHUNKS * nodes {
+            self.chunk_loads.clear();
+            self.chunk_loads.resize(CHUNKS * nodes, 0.0);
+        }
+        // Claim chunks until none is left; the helper does the same, so if it is slow to wake
+        // (a busy machine) this thread simply does more of them.
+        let mut stats = PairStats::default();
+        let mut spans = [None; CHUNKS];
+        let mut next = 0;
+        loop {
+            let k = match helper {
+                Some(h) => h.shared.next.fetch_add(1, Ordering::AcqRel),
+                None => {
+                    next += 1;
+                    next - 1
                 }
-                let start = self.contacts.len();
-                stats.add(&broad.search(bounds[k]..bounds[k + 1], p, eps2, &mut self.contacts));
-                spans[k] = Some((start, self.contacts.len()));
+            };
+            if k >= CHUNKS {
+                break;
             }
-            let job = helper.finish();
+            let start = self.contacts.len();
+            let loads = &mut self.chunk_loads[k * nodes..(k + 1) * nodes];
+            loads.fill(0.0);
+            stats.add(&broad.search(bounds[k]..bounds[k + 1], p, eps2, &mut self.contacts, loads));
+            spans[k] = Some((start, self.contacts.len()));
+        }
+        let job = helper.map(|h| h.finish());
+        if let Some(job) = &job {
             stats.add(&job.stats);
             self.helper_contacts = job.stats.in_contact;
-            // The contacts chunk by chunk, i.e. in cell order: the one-thread order.
-            let lists: [&[Contact]; CHUNKS] = std::array::from_fn(|k| match spans[k] {
-                Some((a, b)) => &self.contacts[a..b],
-                None => {
-                    let (a, b) = job.spans[k];
-                    &job.contacts[a..b]
-                }
-            });
-            for c in lists.iter().flat_map(|l| l.iter()) {
-                response.record(c, segs);
+        }
+        // The contacts chunk by chunk, i.e. in cell order: the one-thread order.
+        let pick = |k: usize| match (spans[k], &job) {
+            (Some((a, b)), _) => (
+                &self.contacts[a..b],
+                &self.chunk_loads[k * nodes..(k + 1) * nodes],
+            ),
+            (None, Some(job)) => {
+                let (a, b) = job.spans[k];
+                (&job.contacts[a..b], &job.loads[k * nodes..(k + 1) * nodes])
             }
-            response.apply(&lists, segs, p, force);
-            stats
-        } else {
-            let stats = broad.search(0..ncells, p, eps2, &mut self.contacts);
-            for c in &self.contacts {
-                response.record(c, segs);
-            }
-            response.apply(&[&self.contacts], segs, p, force);
-            stats
+            (None, None) => unreachable!("every chunk is searched by one of the threads"),
         };
+        let lists: [&[Contact]; CHUNKS] = std::array::from_fn(|k| pick(k).0);
+        let loads: [&[f64]; CHUNKS] = std::array::from_fn(|k| pick(k).1);
+        response.add_loads(&loads);
+        response.apply(&lists, segs, p, force);
         stats
     }
 }

@@ -79,26 +79,32 @@ pub(super) struct Broad {
     /// Segment index | mask << [`MASK_SHIFT`], grouped by cell, ascending index within a cell.
     pub(super) items: Vec<u32>,
     pub(super) grid: GridInfo,
+    /// Per node slot: 1 / its mass as a child, 0 for a kinematic root (as [`Response`] has it),
+    /// for the loads the search records.
+    pub(super) inv_mass: Vec<f64>,
 }
 
 /// Below this many segments the pair search stays on one thread (the hand-over costs more).
 pub(super) const MIN_SEGMENTS_TO_SHARE: usize = 128;
 
 impl Broad {
-    /// Tests the pairs of cells `cells`, appending the contacts (in cell order) to `out`.
+    /// Tests the pairs of cells `cells`, appending the contacts (in cell order) to `out` and
+    /// adding their shares to `loads` (one entry per node slot, see [`Response`]), in the same
+    /// order.
     pub(super) fn search(
         &self,
         cells: Range<usize>,
         p: &ContactParams,
         eps2: f64,
         out: &mut Vec<Contact>,
+        loads: &mut [f64],
     ) -> PairStats {
         let mut stats = PairStats::default();
         let (boxes, pre) = (&self.boxes[..], &self.pre[..]);
         let items = &self.items[..];
         let starts = &self.cell_start[..];
         let before = out.len();
-        let mut batched = Batched::new(p);
+        let mut batched = Batched::new(p, &self.inv_mass, loads);
         const INDEX: u32 = (1 << MASK_SHIFT) - 1;
         for c in cells {
             let cell = &items[starts[c] as usize..starts[c + 1] as usize];
@@ -121,11 +127,11 @@ impl Broad {
                     }
                     stats.tested += 1;
                     // Cell lists are ascending: `a` has the lower index, as `contact` wants.
-                    batched.push(pre, a, b, p, out);
+                    batched.push((boxes, pre), a, b, p, out);
                 }
             }
         }
-        batched.flush(pre, p, out);
+        batched.flush((boxes, pre), p, out);
         stats.in_contact = (out.len() - before) as u32;
         stats
     }

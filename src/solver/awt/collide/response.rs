@@ -74,6 +74,16 @@ impl<'a> Response<'a> {
         }
     }
 
+    /// Adds the loads of the search's chunks, in chunk order (each is what [`Self::record`]
+    /// would have summed over that chunk's contacts).
+    pub(super) fn add_loads(&mut self, chunks: &[&[f64]]) {
+        for c in chunks {
+            for (w, x) in self.load.iter_mut().zip(c.iter()) {
+                *w += x;
+            }
+        }
+    }
+
     /// Scales each contact by the loads of its nodes and adds its forces (eq. 3).
     ///
     /// `1 / max(1, k·W)` with `W` the largest of the four loads is the smallest of the four

@@ -16,6 +16,8 @@ pub(super) struct Job {
     pub(super) params: Option<ContactParams>,
     /// The helper's contacts, and for each chunk it searched, its span in them.
     pub(super) contacts: Vec<Contact>,
+    /// The loads of the chunks it searched: chunk `k`'s per node slot at `k · nodes`.
+    pub(super) loads: Vec<f64>,
     pub(super) spans: [(usize, usize); CHUNKS],
     pub(super) stats: PairStats,
 }
@@ -47,7 +49,7 @@ pub(super) struct Helper {
 }
 
 impl Helper {
-    pub(super) fn spawn(broad: Arc<RwLock<Broad>>, contacts: usize) -> Helper {
+    pub(super) fn spawn(broad: Arc<RwLock<Broad>>, contacts: usize, loads: usize) -> Helper {
         let shared = Arc::new(Shared {
             broad,
             job: Mutex::new(Job {
@@ -55,6 +57,7 @@ impl Helper {
                 bounds: [0; CHUNKS + 1],
                 params: None,
                 contacts: Vec::with_capacity(contacts),
+                loads: Vec::with_capacity(loads),
                 spans: [(0, 0); CHUNKS],
                 stats: PairStats::default(),
             }),
@@ -85,10 +88,16 @@ impl Helper {
                     s.wake.notify_all();
                     let (bounds, p) = (job.bounds, job.params.expect("params of a job"));
                     let mut out = std::mem::take(&mut job.contacts);
+                    let mut loads = std::mem::take(&mut job.loads);
                     drop(job);
                     out.clear();
                     let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
                         let broad = read(&s.broad);
+                        let nodes = broad.inv_mass.len();
+                        if loads.len() != CHUNKS * nodes {
+                            loads.clear();
+                            loads.resize(CHUNKS * nodes, 0.0);
+                        }
                         let eps2 = p.epsilon * p.epsilon;
                         let mut stats = PairStats::default();
                         let mut spans = [(0, 0); CHUNKS];
@@ -99,13 +108,22 @@ impl Helper {
                             }
                             claimed = s.next.fetch_add(1, Ordering::AcqRel);
                             let start = out.len();
-                            stats.add(&broad.search(bounds[k]..bounds[k + 1], &p, eps2, &mut out));
+                            let chunk = &mut loads[k * nodes..(k + 1) * nodes];
+                            chunk.fill(0.0);
+                            stats.add(&broad.search(
+                                bounds[k]..bounds[k + 1],
+                                &p,
+                                eps2,
+                                &mut out,
+                                chunk,
+                            ));
                             spans[k] = (start, out.len());
                         }
                         (stats, spans)
                     }));
                     job = lock(&s.job);
                     job.contacts = out;
+                    job.loads = loads;
                     match result {
                         Ok((stats, spans)) => {
                             job.stats = stats;
