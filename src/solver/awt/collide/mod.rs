@@ -15,6 +15,8 @@
 //!   or two threads;
 //! * `grid.rs`: the broad phase, a uniform voxel grid of segment boxes;
 //! * `narrow.rs`: per-segment data, the cheap filters and the closest points of two segments;
+//! * `batch.rs`: the candidate pairs in structure-of-arrays form, tested in vector lanes by
+//!   [`crate::simd::pairs`];
 //! * `worker.rs`: the helper thread that shares the pair search;
 //! * `response.rs`: friction and repulsion from the contacts, split onto the nodes;
 //! * `body.rs`: the body spheres;
