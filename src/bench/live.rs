@@ -240,7 +240,8 @@ fn run_case(
     );
     Ok(LiveRow {
         solver: case.solver.name().to_owned(),
-        style: scene.style_name(),
+        // The name `--models` takes (`short_curly`), not the display name.
+        style: style_label(&scene.source),
         motion: case.motion.to_owned(),
         split,
         merge,

@@ -89,7 +89,12 @@ pub fn cell_text(cells: &Cells, entity_prefix: &str, component_part: &str) -> Ve
 pub fn run_cells(all: &Cells, label: &str) -> Vec<(CellKey, Vec<ArrayRef>)> {
     let prefix = format!("/runs/{label}/");
     all.iter()
-        .filter(|((e, _, _), _)| e.starts_with(&prefix) && !e.ends_with("/stats/step_ms"))
+        // Wall-clock measurements differ from run to run; everything simulated must not.
+        .filter(|((e, _, _), _)| {
+            e.starts_with(&prefix)
+                && !e.ends_with("/stats/step_ms")
+                && !e.ends_with("/stats/realtime_factor")
+        })
         .map(|(k, v)| (k.clone(), v.clone()))
         .collect()
 }
