@@ -5,7 +5,7 @@
 //! for (`--solvers`, default `awt,single-level`: the §5.2 table), with the same dynamics and
 //! collision code, on one core; the AWT then runs again with the hair–hair pair search shared
 //! with the collider's helper thread (the same result bit for bit; `wisptree run` does so on
-//! machines with 3 or more cores). Only `Solver::step` is timed (wall clock around each call);
+//! machines with 2 or more cores). Only `Solver::step` is timed (wall clock around each call);
 //! loading the style, building the model and the settling before t = 0 are excluded. Then the
 //! whole recording pipeline is timed on Long curly: `wisptree run --save` itself, end to end
 //! ([`time_run_pipeline`]), and the same work done sequentially, by part ([`time_pipeline`]).
