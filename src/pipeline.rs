@@ -205,9 +205,13 @@ fn aggregate_stats(into: &mut Vec<crate::report::Stat>, step: &[crate::report::S
 }
 
 /// Writes the frame's whole stats list ([`Frame::stats`]) from its counters, the solver's own
-/// stats, the step time, the dropped-frame count and the parameters in force: the one list the
-/// logger plots and the bench reads.
-pub fn fill_stats(frame: &mut Frame, params: &crate::style::SimParams) {
+/// stats, the step time, the dropped-frame count and the solver's tunables in force (each at
+/// `/params/<name>`, from its table): the one list the logger plots and the bench reads.
+pub fn fill_stats(
+    frame: &mut Frame,
+    tunables: &[crate::solver::tunable::Tunable],
+    tuning: &crate::solver::tunable::Tuning,
+) {
     use crate::report::paths as p;
     use crate::report::{Aggregate, Stat};
     let c = &frame.counters;
@@ -247,15 +251,9 @@ pub fn fill_stats(frame: &mut Frame, params: &crate::style::SimParams) {
     push(p::STEP_MS, frame.step_ms);
     push(p::DROPPED_FRAMES, frame.dropped_frames as f64);
     push(p::REALTIME_FACTOR, frame.realtime_factor);
-    push(p::SPLIT_THRESHOLD, params.split_threshold);
-    push(p::MERGE_VELOCITY, params.merge_velocity);
-    push(p::FRICTION, params.friction);
-    push(p::REPULSION, params.repulsion);
-    let w = params.wind.velocity;
-    push(
-        p::WIND_SPEED,
-        (w[0] * w[0] + w[1] * w[1] + w[2] * w[2]).sqrt(),
-    );
+    for t in tunables {
+        push(t.path, t.value(tuning));
+    }
 }
 
 #[cfg(test)]

@@ -8,7 +8,9 @@ use nalgebra::Point3;
 use crate::model::HairModel;
 use crate::motion::Motion;
 use crate::solver::{Solver, SolverKind};
-use crate::style::builtin::StyleSource;
+use std::path::Path;
+
+use crate::style::builtin::{builtin, StyleSource};
 use crate::style::{LoadedStyle, SimParams, StyleError};
 
 /// A loaded style, its model, the motion and the solver choice: everything a run is built
@@ -159,8 +161,34 @@ impl Scene {
 /// Reads a style and builds its model: the one way every command reads a style.
 pub fn load_model(source: &StyleSource) -> Result<(LoadedStyle, HairModel), StyleError> {
     let loaded = source.load()?;
+    let text = match source {
+        StyleSource::Builtin(name) => builtin(name).map(|b| b.text.to_owned()),
+        StyleSource::File(p) => std::fs::read_to_string(p).ok(),
+    };
+    check_sections(&loaded, text.as_deref())?;
     let model = HairModel::from_style(&loaded)?;
     Ok((loaded, model))
+}
+
+/// Reads and checks a style file, the solvers' sections included (as [`load_model`] does).
+pub fn load_style(path: &Path) -> Result<LoadedStyle, StyleError> {
+    let loaded = crate::style::load(path)?;
+    check_sections(&loaded, std::fs::read_to_string(path).ok().as_deref())?;
+    Ok(loaded)
+}
+
+/// Parses and checks style text, the solvers' sections included; `path` names it in errors.
+pub fn parse_style(path: &Path, text: &str) -> Result<LoadedStyle, StyleError> {
+    let loaded = crate::style::parse(path, text)?;
+    check_sections(&loaded, Some(text))?;
+    Ok(loaded)
+}
+
+/// The `layered:` and `guides:` sections by their solvers' rules ([`crate::solver::check_sections`]),
+/// as an error naming the file, line and field.
+fn check_sections(loaded: &LoadedStyle, text: Option<&str>) -> Result<(), StyleError> {
+    crate::solver::check_sections(&loaded.style)
+        .map_err(|(field, msg)| crate::style::field_error(&loaded.path, text, &field, msg))
 }
 
 /// The display name of a loaded style: its `name`, else the file stem.

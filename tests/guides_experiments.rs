@@ -114,7 +114,7 @@ fn bad_obstacles_are_errors_naming_the_field() {
     ] {
         let t = text.replacen(from, to, 1);
         assert_ne!(t, text);
-        let err = wisptree::style::parse(std::path::Path::new("x.ron"), &t).unwrap_err();
+        let err = wisptree::scene::parse_style(std::path::Path::new("x.ron"), &t).unwrap_err();
         let msg = err.to_string();
         assert!(msg.contains("x.ron") && msg.contains(field), "{msg}");
     }

@@ -557,7 +557,7 @@ fn bad_layered_values_are_errors_naming_the_field() {
         ("layered.level", "level: 4"),
     ] {
         let text = format!("{base},\n layered: ({bad}),\n)");
-        let err = wisptree::style::parse(std::path::Path::new("bad.ron"), &text)
+        let err = wisptree::scene::parse_style(std::path::Path::new("bad.ron"), &text)
             .expect_err(bad)
             .to_string();
         assert!(

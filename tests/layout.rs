@@ -30,16 +30,6 @@ const LAYERS: &[&str] = &[
     "simd",
 ];
 
-/// Imports that point up today, as (file, the module above it that the file uses). Issue 26 §1,
-/// to be removed: the style's solver sections become plain data in `style/` (or the solvers sit
-/// below it). An entry that no longer occurs fails the test, so that it is removed with its fix.
-const KNOWN_UPWARD: &[(&str, &str)] = &[
-    // `LayeredParams`, `GuideParams` in the style schema (issue 26 §1, to be removed).
-    ("src/style/schema.rs", "solver"),
-    // `solver::guides::params::validate` (issue 26 §1, to be removed).
-    ("src/style/mod.rs", "solver"),
-];
-
 fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
 }
@@ -253,7 +243,6 @@ fn used_modules(code: &str, depth: usize) -> BTreeSet<String> {
 fn no_source_file_imports_from_a_layer_above_its_own() {
     let rank: BTreeMap<&str, usize> = LAYERS.iter().enumerate().map(|(i, m)| (*m, i)).collect();
     let src = root().join("src");
-    let mut found = BTreeSet::new();
     let mut wrong = Vec::new();
     for file in rust_files(&src) {
         let rel = file.strip_prefix(&src).unwrap();
@@ -273,13 +262,9 @@ fn no_source_file_imports_from_a_layer_above_its_own() {
                 continue; // not a top-level module (a path inside this one, or `crate::` alone)
             };
             if r < own_rank {
-                if KNOWN_UPWARD.contains(&(shown.as_str(), m.as_str())) {
-                    found.insert((shown.clone(), m));
-                } else {
-                    wrong.push(format!(
-                        "{shown} (layer `{own}`) uses `{m}`, a layer above it"
-                    ));
-                }
+                wrong.push(format!(
+                    "{shown} (layer `{own}`) uses `{m}`, a layer above it"
+                ));
             }
         }
     }
@@ -288,12 +273,6 @@ fn no_source_file_imports_from_a_layer_above_its_own() {
         "imports against the layer order (tests/layout.rs's LAYERS):\n{}",
         wrong.join("\n")
     );
-    for (file, m) in KNOWN_UPWARD {
-        assert!(
-            found.contains(&(file.to_string(), m.to_string())),
-            "{file} no longer uses `{m}`: remove it from KNOWN_UPWARD in tests/layout.rs"
-        );
-    }
 }
 
 #[test]

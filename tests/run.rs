@@ -115,8 +115,8 @@ fn a_short_recording_holds_every_path_one_row_per_frame_and_the_events_of_each_f
         paths::KINETIC_ENERGY,
         paths::STEP_MS,
         paths::DROPPED_FRAMES,
-        paths::SPLIT_THRESHOLD,
-        paths::MERGE_VELOCITY,
+        "/params/split_threshold",
+        "/params/merge_velocity",
         &paths::active_nodes_level(0),
         &paths::active_nodes_level(1),
     ] {
@@ -326,7 +326,7 @@ fn saving_the_watched_style_changes_the_threshold_logged_in_later_frames() {
     assert_eq!(summary.reloads, 1, "{summary:?}");
 
     let chunks = decode_file(&out);
-    let thresholds = scalars(&chunks, paths::SPLIT_THRESHOLD);
+    let thresholds = scalars(&chunks, "/params/split_threshold");
     assert_eq!(thresholds.len() as u64, summary.frames_logged);
     assert_eq!(thresholds[0].1, 0.2);
     let first_new = thresholds

@@ -91,12 +91,11 @@ fn synthetic_frame(index: u64) -> Frame {
         f.merges = 1;
         f.messages.push("split threshold changed to 0.2".to_owned());
     }
-    let params = wisptree::style::SimParams {
-        split_threshold: 0.2,
-        merge_velocity: 0.05,
-        ..Default::default()
-    };
-    wisptree::pipeline::fill_stats(&mut f, &params);
+    let mut tuning = wisptree::solver::tunable::Tuning::default();
+    tuning.sim.split_threshold = 0.2;
+    tuning.sim.merge_velocity = 0.05;
+    let awt = wisptree::solver::SolverKind::Awt.tunables();
+    wisptree::pipeline::fill_stats(&mut f, awt, &tuning);
     f
 }
 
@@ -186,8 +185,8 @@ fn every_entity_path_appears() {
         paths::KINETIC_ENERGY,
         paths::STEP_MS,
         paths::DROPPED_FRAMES,
-        paths::SPLIT_THRESHOLD,
-        paths::MERGE_VELOCITY,
+        "/params/split_threshold",
+        "/params/merge_velocity",
     ]
     .iter()
     .map(|s| s.to_string())

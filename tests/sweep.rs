@@ -65,7 +65,39 @@ fn lists(model: Option<&str>, split: Option<&str>, merge: Option<&str>) -> Sweep
         model: model.map(str::to_owned),
         split: split.map(str::to_owned),
         merge: merge.map(str::to_owned),
+        set: Vec::new(),
     }
+}
+
+#[test]
+fn set_sweeps_any_tunable_of_the_models_table_in_every_combination() {
+    let mut l = lists(Some("layered"), None, None);
+    l.set = vec!["viscosity=0.5,50".into(), "bending=100,200".into()];
+    let c = product(&l).unwrap();
+    let labels: Vec<&str> = c.iter().map(|c| c.label.as_str()).collect();
+    assert_eq!(
+        labels,
+        [
+            "layered_viscosity0.5_bending100",
+            "layered_viscosity0.5_bending200",
+            "layered_viscosity50_bending100",
+            "layered_viscosity50_bending200",
+        ]
+    );
+    // The values reach the style's sections the solver is built from.
+    let t = c[2].tuning(&wisptree::solver::tunable::Tuning::default());
+    assert_eq!((t.layered.viscosity, t.layered.bending), (50.0, 100.0));
+    // `--set split_threshold=` is `--split`: the same configurations and labels.
+    let mut a = lists(None, None, None);
+    a.set = vec!["split_threshold=0.1,0.3".into()];
+    assert_eq!(
+        product(&a).unwrap(),
+        product(&lists(None, Some("0.1,0.3"), None)).unwrap()
+    );
+    let mut g = lists(Some("guides"), None, None);
+    g.set = vec!["link_strength=0,900".into()];
+    let t = product(&g).unwrap()[1].tuning(&wisptree::solver::tunable::Tuning::default());
+    assert_eq!(t.guides.link_strength, 900.0);
 }
 
 #[test]
@@ -218,6 +250,31 @@ fn bad_lists_exit_2_naming_the_flag_and_the_item() {
             "--variants /nonexistent/v.ron",
         ),
         (&["--variants", &v, "--split", "0.1"], "cannot be used with"),
+        (
+            &["--variants", &v, "--set", "wind=1"],
+            "cannot be used with",
+        ),
+        (
+            &["--set", "gravity=1"],
+            "--set: `gravity` is not a tunable of the swept model (awt: split_threshold",
+        ),
+        (
+            &["--model", "layered", "--set", "viscosity=500"],
+            "viscosity: interpenetration viscosity ν 500 refused: it must be between 0 and 100",
+        ),
+        (
+            &["--model", "layered", "--set", "viscosity=1,x"],
+            "viscosity: value 2 `x` is not a number",
+        ),
+        (&["--set", "viscosity"], "expected NAME=v1,v2"),
+        (
+            &["--set", "split_threshold=0.1", "--split", "0.2"],
+            "--set split_threshold: given twice",
+        ),
+        (
+            &["--set", "wind=1", "--set", "wind=2"],
+            "--set wind: given twice",
+        ),
     ];
     for (args, want) in cases {
         let mut all = vec!["sweep", "--no-progress", "--save", "/nonexistent/never.rrd"];

@@ -47,7 +47,7 @@ fn the_control_endpoint_takes_only_the_pages_requests_from_its_own_origin() {
     let page = http(port, "GET", "/", &[], "");
     assert_eq!(page.status, 200);
     assert!(
-        page.body.contains("split") && page.body.contains("<iframe"),
+        page.body.contains("id=\"params\"") && page.body.contains("<iframe"),
         "{}",
         page.body
     );
@@ -158,7 +158,66 @@ fn the_control_endpoint_takes_only_the_pages_requests_from_its_own_origin() {
     let s = run.wait_state("model and motion switched", |s| {
         s["model"] == "single-level" && s["motion"] == "shake"
     });
+    // Single-level has no thresholds: its table, and so the page, has no such slider.
+    assert_eq!(s["params"]["split_threshold"].as_f64(), None, "{s}");
+    assert_eq!(s["params"]["wind"].as_f64(), Some(2.0), "{s}");
+    assert_eq!(run.control(r#"{"type":"model","name":"awt"}"#).status, 200);
+    let s = run.wait_state("back to the AWT", |s| s["model"] == "awt");
     assert_eq!(s["params"]["split_threshold"].as_f64(), Some(0.45), "{s}");
     let t = s["sim_time"].as_f64().unwrap();
     run.wait_state("still simulating", |s| s["sim_time"].as_f64().unwrap() > t);
+}
+
+/// The page's sliders are the running model's table of tunables: the layered model's own
+/// (viscosity, …), refused for a name of another model, and the guide model's after a switch.
+#[test]
+fn each_model_brings_its_own_tunables_to_the_page() {
+    let run = WebRun::start(&["--model", "layered"]);
+    let s = run.wait_state("first published state", |s| {
+        s["model"].as_str() == Some("layered")
+    });
+    let names: Vec<&str> = s["tunables"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|t| t["name"].as_str().unwrap())
+        .collect();
+    let table: Vec<&str> = wisptree::solver::SolverKind::Layered
+        .tunables()
+        .iter()
+        .map(|t| t.name)
+        .collect();
+    assert_eq!(
+        names, table,
+        "the state carries the layered table, in its order"
+    );
+    assert!(s["tunables"][0]["label"]
+        .as_str()
+        .unwrap()
+        .contains("viscosity"));
+
+    let r = run.control(r#"{"type":"set","param":"viscosity","value":50}"#);
+    assert_eq!(r.status, 200, "{}", r.body);
+    run.wait_state("viscosity applied", |s| {
+        s["params"]["viscosity"].as_f64() == Some(50.0)
+    });
+    let r = run.control(r#"{"type":"set","param":"split_threshold","value":0.2}"#);
+    assert_eq!(r.status, 400, "{}", r.body);
+    assert!(r.body.contains("for model layered"), "{}", r.body);
+    let r = run.control(r#"{"type":"set","param":"viscosity","value":500}"#);
+    assert_eq!(r.status, 400, "{}", r.body);
+    assert!(r.body.contains("between 0 and 100"), "{}", r.body);
+
+    let r = run.control(r#"{"type":"model","name":"guides"}"#);
+    assert_eq!(r.status, 200, "{}", r.body);
+    run.wait_state("the guide model's table", |s| {
+        s["tunables"]
+            .as_array()
+            .is_some_and(|t| t.iter().any(|t| t["name"] == "link_strength"))
+    });
+    let r = run.control(r#"{"type":"set","param":"link_strength","value":900}"#);
+    assert_eq!(r.status, 200, "{}", r.body);
+    run.wait_state("link stiffness applied", |s| {
+        s["params"]["link_strength"].as_f64() == Some(900.0)
+    });
 }

@@ -310,3 +310,70 @@ fn docs_shot(run: &mut WebRun) {
     let docs = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("docs/web.png");
     std::fs::write(docs, &bytes).unwrap();
 }
+
+/// The sliders are the running model's table: the layered model's viscosity slider moves its
+/// value, and switching to the guide model (the page's model selector) rebuilds the sliders
+/// with the guide model's tunables.
+#[test]
+fn the_page_shows_the_running_models_own_sliders_and_rebuilds_them_on_a_switch() {
+    let run = WebRun::start(&["--model", "layered"]);
+    run.wait_state("first published state", |s| {
+        s["model"].as_str() == Some("layered")
+    });
+    let d = Driver::start();
+    let page = format!("{}?viewer=0", run.url());
+    d.call("POST", "/url", Some(json!({"url": page})));
+    d.wait_text("#v-viscosity", "the layered sliders", |t| {
+        t.parse::<f64>().is_ok()
+    });
+    let ids = |d: &Driver| {
+        d.script(
+            "return [...document.querySelectorAll('#params input[type=range]')].map(e => e.id)",
+            json!([]),
+        )
+    };
+    let expected: Vec<String> = wisptree::solver::SolverKind::Layered
+        .tunables()
+        .iter()
+        .map(|t| format!("p-{}", t.name))
+        .collect();
+    assert_eq!(ids(&d), json!(expected));
+
+    // The middle of the linear 0–100 s⁻¹ range.
+    d.click("#p-viscosity");
+    let s = run.wait_state("the viscosity reaches the simulation", |s| {
+        s["params"]["viscosity"].as_f64().is_some_and(|v| v != 10.0)
+    });
+    let v = s["params"]["viscosity"].as_f64().unwrap();
+    assert!((v - 50.0).abs() < 3.0, "{v}");
+
+    // The model selector: the guide model's sliders replace the layered ones.
+    d.script(
+        "const s = document.getElementById('model'); s.value = 'guides'; \
+         s.dispatchEvent(new Event('change'));",
+        json!([]),
+    );
+    run.wait_state("the guide model runs", |s| {
+        s["model"].as_str() == Some("guides")
+    });
+    let start = Instant::now();
+    let want: Vec<String> = wisptree::solver::SolverKind::Guides
+        .tunables()
+        .iter()
+        .map(|t| format!("p-{}", t.name))
+        .collect();
+    while ids(&d) != json!(want) {
+        assert!(
+            start.elapsed() < Duration::from_secs(30),
+            "the sliders were not rebuilt: {}",
+            ids(&d)
+        );
+        std::thread::sleep(Duration::from_millis(100));
+    }
+    d.click("#p-link_strength");
+    run.wait_state("the link stiffness reaches the simulation", |s| {
+        s["params"]["link_strength"]
+            .as_f64()
+            .is_some_and(|v| (v - 1000.0).abs() < 50.0)
+    });
+}

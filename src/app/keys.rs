@@ -2,7 +2,7 @@
 
 use crossterm::event::{KeyCode, KeyEvent, KeyEventKind, KeyModifiers};
 
-use crate::style::SimParams;
+use crate::solver::Solver;
 
 /// Factor of one key press on a threshold.
 pub const KEY_STEP: f64 = 1.25;
@@ -60,51 +60,84 @@ pub fn key_action(k: &KeyEvent) -> Option<KeyAction> {
     })
 }
 
-/// Applies a threshold key to `p` and returns the message for the log; `None` for the keys that
-/// do not change a parameter.
-pub fn apply_key(p: &mut SimParams, action: KeyAction) -> Option<String> {
-    let (name, value, factor) = match action {
-        KeyAction::SplitUp => ("split threshold", &mut p.split_threshold, KEY_STEP),
-        KeyAction::SplitDown => ("split threshold", &mut p.split_threshold, 1.0 / KEY_STEP),
-        KeyAction::MergeUp => ("merge velocity threshold", &mut p.merge_velocity, KEY_STEP),
-        KeyAction::MergeDown => (
-            "merge velocity threshold",
-            &mut p.merge_velocity,
-            1.0 / KEY_STEP,
-        ),
+/// The tunable a threshold key changes, and the factor of one press.
+fn key_tunable(action: KeyAction) -> Option<(&'static str, f64)> {
+    Some(match action {
+        KeyAction::SplitUp => ("split_threshold", KEY_STEP),
+        KeyAction::SplitDown => ("split_threshold", 1.0 / KEY_STEP),
+        KeyAction::MergeUp => ("merge_velocity", KEY_STEP),
+        KeyAction::MergeDown => ("merge_velocity", 1.0 / KEY_STEP),
         _ => return None,
+    })
+}
+
+/// Applies a threshold key to the running solver through its table of tunables (the value
+/// stays inside the entry's range) and returns the message for the log; `None` for the keys
+/// that do not change a parameter.
+pub fn apply_key(solver: &mut dyn Solver, action: KeyAction) -> Option<String> {
+    let (name, factor) = key_tunable(action)?;
+    let Some(entry) = crate::solver::tunable::find(solver.tunables(), name) else {
+        return Some(format!(
+            "model {} has no {name} (key ignored)",
+            solver.kind()
+        ));
     };
-    let old = *value;
-    *value = old * factor;
-    let unit = if name.starts_with("split") {
-        "N·m·kg⁻¹"
-    } else {
-        "m/s"
-    };
-    Some(format!("{name} {old:.4} → {:.4} {unit} (key)", *value))
+    let old = entry.value(&solver.tuning());
+    let new = (old * factor).clamp(entry.min, entry.max);
+    Some(match solver.set_tunable(name, new) {
+        Ok(_) => format!("{} (key)", entry.describe_change(old, new)),
+        Err(e) => format!("key not applied: {e}"),
+    })
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
 
+    use crate::scene::Scene;
+    use crate::solver::SolverKind;
+
+    fn solver(kind: SolverKind) -> Box<dyn Solver> {
+        let mut scene = Scene::load("short", "still", kind).unwrap();
+        scene.loaded.style.sim.settle = 0.0;
+        // A few strands are enough to hold parameters.
+        scene.solver()
+    }
+
     #[test]
     fn threshold_keys_scale_by_the_step_and_undo_each_other() {
-        let mut p = SimParams::default();
-        let s0 = p.split_threshold;
-        let m0 = p.merge_velocity;
-        let msg = apply_key(&mut p, KeyAction::SplitUp).unwrap();
-        assert!((p.split_threshold - s0 * KEY_STEP).abs() < 1e-12);
+        let mut s = solver(SolverKind::Awt);
+        let get = |s: &dyn Solver| (s.params().split_threshold, s.params().merge_velocity);
+        let (s0, m0) = get(&*s);
+        let msg = apply_key(&mut *s, KeyAction::SplitUp).unwrap();
+        assert!((get(&*s).0 - s0 * KEY_STEP).abs() < 1e-12);
         assert!(msg.contains("split threshold"), "{msg}");
-        apply_key(&mut p, KeyAction::SplitDown).unwrap();
-        assert!((p.split_threshold - s0).abs() < 1e-12);
-        apply_key(&mut p, KeyAction::MergeDown).unwrap();
-        assert!((p.merge_velocity - m0 / KEY_STEP).abs() < 1e-12);
+        apply_key(&mut *s, KeyAction::SplitDown).unwrap();
+        assert!((get(&*s).0 - s0).abs() < 1e-12);
+        apply_key(&mut *s, KeyAction::MergeDown).unwrap();
+        assert!((get(&*s).1 - m0 / KEY_STEP).abs() < 1e-12);
         assert!(
-            (p.split_threshold - s0).abs() < 1e-12,
+            (get(&*s).0 - s0).abs() < 1e-12,
             "merge keys leave the split threshold"
         );
-        assert!(apply_key(&mut p, KeyAction::Restart).is_none());
+        assert!(apply_key(&mut *s, KeyAction::Restart).is_none());
+        // The table's range holds: many presses stop at the slider's end.
+        for _ in 0..40 {
+            apply_key(&mut *s, KeyAction::SplitDown).unwrap();
+        }
+        assert_eq!(get(&*s).0, 0.05);
+    }
+
+    #[test]
+    fn a_model_without_thresholds_says_so_and_keeps_its_values() {
+        let mut s = solver(SolverKind::Layered);
+        let before = s.tuning();
+        let msg = apply_key(&mut *s, KeyAction::SplitUp).unwrap();
+        assert!(
+            msg.contains("model layered has no split_threshold"),
+            "{msg}"
+        );
+        assert_eq!(s.tuning(), before);
     }
 
     #[test]

@@ -10,7 +10,6 @@
 //! sim_thread    the simulation thread: step, fill, pace, apply controls
 //! render_thread the render thread: images for the frames, skipped when behind (live)
 //! log_thread    the logging thread: frames to Rerun
-//! page_params   values set on the control page (and the wind they scale)
 //! keys          which key does what
 //! style_watcher the style file's settled changes
 //! console       lines printed around the progress bar
@@ -23,7 +22,6 @@ pub mod experiment;
 pub mod export;
 pub mod keys;
 mod log_thread;
-pub mod page_params;
 pub mod reload;
 pub mod render_cmd;
 pub mod render_thread;

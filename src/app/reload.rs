@@ -1,9 +1,11 @@
 //! A saved edit of the watched style file, turned into what the simulation thread must do.
 //!
 //! What counts as a parameter and what as geometry: the style's `sim` section is tunable in
-//! place, except `total_mass` (the model's node masses are built from it). The head, the hair, the
-//! hierarchy, the link and the seed describe the model itself: a change there needs a new model
-//! and a restart.
+//! place, except `total_mass` (the model's node masses are built from it), and so are the values
+//! of the `layered:` and `guides:` sections that their solvers' tables of tunables list. The
+//! head, the hair, the hierarchy, the link, the seed and the other values of those sections
+//! describe the model itself (or are read when a solver is built): a change there needs a new
+//! model and a restart.
 
 use crossbeam_channel::Sender;
 
@@ -13,8 +15,10 @@ use super::console::Console;
 use super::sim_thread::Control;
 use crate::model::HairModel;
 use crate::scene::Scene;
+use crate::solver::tunable::Tuning;
+use crate::solver::SolverKind;
 use crate::stream::MessageLevel;
-use crate::style::{self, LoadedStyle, SimParams, Style, StyleError};
+use crate::style::{LoadedStyle, SimParams, Style, StyleError};
 
 /// What a new version of the style file means for a running simulation.
 #[derive(Debug)]
@@ -39,13 +43,33 @@ pub fn geometry_changed(old: &Style, new: &Style) -> bool {
         || old.link != new.link
         // Node masses are built from the total mass.
         || old.sim.total_mass != new.sim.total_mass
+        || model_sections_changed(old, new)
+}
+
+/// The tunables of the `layered:` and `guides:` sections (the `sim:` section is applied whole).
+fn section_tunables() -> impl Iterator<Item = &'static crate::solver::tunable::Tunable> {
+    [SolverKind::Layered, SolverKind::Guides]
+        .into_iter()
+        .flat_map(|k| k.tunables())
+        .filter(|t| t.name != crate::solver::tunable::WIND.name)
+}
+
+/// Whether the `layered:` or `guides:` section changed in a value that no table of tunables
+/// lists (such values are read when a solver is built).
+fn model_sections_changed(old: &Style, new: &Style) -> bool {
+    let target = Tuning::of(new);
+    let mut probe = Tuning::of(old);
+    for t in section_tunables() {
+        (t.set)(&mut probe, t.value(&target));
+    }
+    probe.layered != target.layered || probe.guides != target.guides
 }
 
 /// Reads `path` again and says what changed relative to `current`. A model is built only when
 /// the geometry changed (and then with the same code as every command: `style::load` +
 /// `HairModel::from_style`, as in `cli::load_model`).
 pub fn reload(path: &Path, current: &Style) -> StyleChange {
-    let loaded = match style::load(path) {
+    let loaded = match crate::scene::load_style(path) {
         Ok(l) => l,
         Err(e) => return StyleChange::Invalid(e),
     };
@@ -55,7 +79,7 @@ pub fn reload(path: &Path, current: &Style) -> StyleChange {
             Err(e) => StyleChange::Invalid(e),
         };
     }
-    if loaded.style.sim == current.sim {
+    if Tuning::of(&loaded.style) == Tuning::of(current) {
         StyleChange::Unchanged
     } else {
         StyleChange::Params(Box::new(loaded))
@@ -63,7 +87,30 @@ pub fn reload(path: &Path, current: &Style) -> StyleChange {
 }
 
 /// The names and values of the parameters that differ, `name old → new`, for the log.
-pub fn describe_param_changes(old: &SimParams, new: &SimParams) -> String {
+pub fn describe_changes(old: &Style, new: &Style) -> String {
+    describe_param_changes(&old.sim, &new.sim, &Tuning::of(old), &Tuning::of(new))
+}
+
+/// The tunables of the layered and guide sections that differ, `name old → new`.
+fn describe_section_changes(old: &Tuning, new: &Tuning) -> Vec<String> {
+    let mut out: Vec<String> = Vec::new();
+    for t in section_tunables() {
+        let (a, b) = (t.value(old), t.value(new));
+        let line = format!("{} {a} → {b}", t.name);
+        if a != b && !out.contains(&line) {
+            out.push(line);
+        }
+    }
+    out
+}
+
+/// See [`describe_changes`].
+fn describe_param_changes(
+    old: &SimParams,
+    new: &SimParams,
+    old_t: &Tuning,
+    new_t: &Tuning,
+) -> String {
     let mut parts = Vec::new();
     let mut num = |name: &str, a: f64, b: f64| {
         if a != b {
@@ -92,6 +139,7 @@ pub fn describe_param_changes(old: &SimParams, new: &SimParams) -> String {
     if old.wind != new.wind {
         parts.push("wind".to_owned());
     }
+    parts.extend(describe_section_changes(old_t, new_t));
     if parts.is_empty() {
         "no parameter changed".to_owned()
     } else {
@@ -120,9 +168,9 @@ pub fn handle_reload(
             let msg = format!(
                 "{}: applied {}",
                 path.display(),
-                describe_param_changes(&file_style.style.sim, &new.style.sim)
+                describe_changes(&file_style.style, &new.style)
             );
-            let _ = ctl.send(Control::Params(Box::new(new.style.sim.clone()), msg));
+            let _ = ctl.send(Control::Params(Box::new(Tuning::of(&new.style)), msg));
             *file_style = *new;
             return true;
         }
@@ -166,7 +214,9 @@ mod tests {
         let text =
             std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("styles/long.ron"))
                 .unwrap();
-        let a = style::parse(Path::new("long.ron"), &text).unwrap().style;
+        let a = crate::style::parse(Path::new("long.ron"), &text)
+            .unwrap()
+            .style;
         let mut b = a.clone();
         b.sim.split_threshold *= 2.0;
         assert!(!geometry_changed(&a, &b));
@@ -178,5 +228,21 @@ mod tests {
         let mut d = a.clone();
         d.name = "renamed".into();
         assert!(!geometry_changed(&a, &d));
+        // A tunable of a model's section is applied in place; its other values need a restart.
+        let mut e = a.clone();
+        e.layered.viscosity = 50.0;
+        e.guides.link_strength = 900.0;
+        assert!(!geometry_changed(&a, &e));
+        let msg = describe_changes(&a, &e);
+        assert!(
+            msg.contains("viscosity 10 → 50") && msg.contains("link_strength 300 → 900"),
+            "{msg}"
+        );
+        let mut f = a.clone();
+        f.guides.count = 50;
+        assert!(geometry_changed(&a, &f));
+        let mut g = a.clone();
+        g.layered.level = 0;
+        assert!(geometry_changed(&a, &g));
     }
 }

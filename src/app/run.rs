@@ -176,6 +176,7 @@ fn start_page(
         .collect();
     let shared = Arc::new(SharedState::new(models, motions));
     let (tx, rx) = crossbeam_channel::unbounded();
+    let (tunes_tx, tunes_rx) = crossbeam_channel::unbounded();
     let page = ControlPage::start(
         PageConfig {
             bind: w.bind,
@@ -185,6 +186,7 @@ fn start_page(
         },
         Arc::clone(&shared),
         tx,
+        tunes_tx,
     )?;
     let url = page.url();
     console.say(&format!(
@@ -207,6 +209,7 @@ fn start_page(
         WebLink {
             shared,
             commands: rx,
+            tunes: tunes_rx,
         },
     ))
 }

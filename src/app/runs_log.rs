@@ -63,7 +63,7 @@ impl RunLog {
         f.realtime_factor = self
             .meter
             .frame_done(solver.dt() * solver.steps_per_frame() as f64);
-        pipeline::fill_stats(f, solver.params());
+        pipeline::fill_stats(f, solver.tunables(), &solver.tuning());
         let total: u32 = f.counters.active_per_level.iter().sum();
         f.stats.push(Stat {
             path: RUN_ACTIVE_TOTAL,

@@ -8,16 +8,14 @@ use crossbeam_channel::{Receiver, Sender, TrySendError};
 
 use super::console::Console;
 use super::keys::{self, KeyAction};
-use super::page_params;
 use super::stop::StopSignal;
 use crate::frame::Frame;
 use crate::pipeline::{self, FrameBuilder};
 use crate::report::tempo::{RealtimeMeter, Tempo, SLOW_BELOW};
 use crate::scene::Scene;
+use crate::solver::tunable::{self, Tuning};
 use crate::solver::Solver;
-use crate::style::{SimParams, Wind};
-use crate::web::Param;
-use crate::web::{Controls, ParamValues, SharedState};
+use crate::web::{Controls, SetTunable, SharedState};
 
 /// Poll period while paused.
 const PAUSE_POLL: Duration = Duration::from_millis(25);
@@ -26,14 +24,13 @@ const MAX_LATENESS: Duration = Duration::from_millis(250);
 
 /// What the main thread sends to the simulation thread.
 pub enum Control {
-    /// New tunable parameters (from a style reload), with the message describing them.
-    Params(Box<SimParams>, String),
+    /// New parameters from a style reload (the `sim:` section, and the other models' tunable
+    /// values), with the message describing them.
+    Params(Box<Tuning>, String),
     /// A new model (geometry changed): restart on it.
     Rebuild(Box<Scene>, String),
     /// A key the main thread does not handle itself.
     Key(KeyAction),
-    /// One parameter set on the control page (checked there).
-    Set(Param, f64),
     /// Pause (`true`) or resume, from the control page.
     Pause(bool),
     /// Restart on another scene (motion or model chosen on the page) with the parameters in
@@ -116,6 +113,9 @@ pub struct SimThread {
     pub free: Receiver<Frame>,
     /// What the control pages show (`run --web`), published every frame.
     pub shared: Option<Arc<SharedState>>,
+    /// Tunable values set on the control pages (checked there against the table published
+    /// in `shared`).
+    pub tunes: Option<Receiver<SetTunable>>,
 }
 
 /// The state of the loop that a control message may change.
@@ -128,9 +128,6 @@ struct LoopState {
     paused: bool,
     time_offset: f64,
     out: SimOutcome,
-    /// The control page's wind strength in force, and the wind it scales.
-    wind_strength: f64,
-    base_wind: Wind,
     /// How fast the frames come (`/stats/realtime_factor`).
     meter: RealtimeMeter,
     /// Whether this scene's run already said it fell below real time.
@@ -150,8 +147,6 @@ impl SimThread {
             paused: false,
             time_offset: 0.0,
             out: SimOutcome::default(),
-            wind_strength: page_params::initial_wind_strength(&self.scene.loaded.style.sim.wind),
-            base_wind: page_params::base_wind(&self.scene.loaded.style.sim.wind),
             meter: RealtimeMeter::new(),
             said_slow: false,
         };
@@ -235,7 +230,7 @@ impl SimThread {
 
     /// Applies every pending control message; true if any arrived (the clock restarts).
     fn apply_controls(&mut self, st: &mut LoopState, console: &Console) -> bool {
-        let mut any = false;
+        let mut any = self.apply_tunes(st, console);
         while let Ok(c) = self.ctl.try_recv() {
             any = true;
             let shared = self.shared.clone();
@@ -247,22 +242,8 @@ impl SimThread {
                 st.messages.push(msg);
             };
             match c {
-                Control::Params(p, msg) => {
-                    st.wind_strength = page_params::initial_wind_strength(&p.wind);
-                    st.base_wind = page_params::base_wind(&p.wind);
-                    st.solver.set_params(&p);
-                    say(msg, st);
-                }
-                Control::Set(param, value) => {
-                    let mut p = st.solver.params().clone();
-                    let msg = page_params::apply_param(
-                        &mut p,
-                        &mut st.wind_strength,
-                        &st.base_wind,
-                        param,
-                        value,
-                    );
-                    st.solver.set_params(&p);
+                Control::Params(t, msg) => {
+                    st.solver.set_tuning(&t);
                     say(msg, st);
                 }
                 Control::Pause(paused) => {
@@ -293,9 +274,6 @@ impl SimThread {
                     st.solver = self.scene.solver();
                     st.said_slow = false;
                     st.meter.restart_clock();
-                    st.wind_strength =
-                        page_params::initial_wind_strength(&self.scene.loaded.style.sim.wind);
-                    st.base_wind = page_params::base_wind(&self.scene.loaded.style.sim.wind);
                 }
                 Control::Key(KeyAction::TogglePause) => {
                     st.paused = !st.paused;
@@ -317,13 +295,37 @@ impl SimThread {
                     st.out.restarts += 1;
                 }
                 Control::Key(a) => {
-                    let mut p = st.solver.params().clone();
-                    if let Some(msg) = keys::apply_key(&mut p, a) {
-                        st.solver.set_params(&p);
+                    if let Some(msg) = keys::apply_key(&mut *st.solver, a) {
                         say(msg, st);
                     }
                 }
             }
+        }
+        any
+    }
+
+    /// Sets the tunable values the pages sent, each through the solver's table (the one hop
+    /// from the page's channel to the solver); true if any arrived.
+    fn apply_tunes(&self, st: &mut LoopState, console: &Console) -> bool {
+        let Some(tunes) = &self.tunes else {
+            return false;
+        };
+        let mut any = false;
+        while let Ok(SetTunable { name, value }) = tunes.try_recv() {
+            any = true;
+            let msg = match st.solver.set_tunable(&name, value) {
+                Ok(old) => match tunable::find(st.solver.tunables(), &name) {
+                    Some(t) => format!("{} (web page)", t.describe_change(old, value)),
+                    None => format!("{name} {old} → {value} (web page)"),
+                },
+                // The page checked it against the table it was shown; the model changed since.
+                Err(e) => format!("not applied: {e}"),
+            };
+            console.say(&msg);
+            if let Some(s) = &self.shared {
+                s.log(&msg);
+            }
+            st.messages.push(msg);
         }
         any
     }
@@ -347,20 +349,18 @@ impl SimThread {
     /// Tells the control pages what is in force.
     fn publish(&self, st: &LoopState) {
         let Some(shared) = &self.shared else { return };
-        let p = st.solver.params();
+        let tuning = st.solver.tuning();
         shared.publish(
-            Controls {
+            &Controls {
                 paused: st.paused,
                 model: st.solver.kind().name(),
                 motion: &self.scene.motion_spec,
-                params: ParamValues {
-                    split_threshold: p.split_threshold,
-                    merge_velocity: p.merge_velocity,
-                    friction: p.friction,
-                    repulsion: p.repulsion,
-                    wind: st.wind_strength,
-                },
-                dt: st.solver.dt(),
+                tunables: st
+                    .solver
+                    .tunables()
+                    .iter()
+                    .map(|t| t.view(&tuning))
+                    .collect(),
             },
             st.time_offset + st.solver.time(),
             st.meter.window_factor(),
@@ -388,7 +388,7 @@ fn make_frame(
         .meter
         .frame_done(st.solver.dt() * st.solver.steps_per_frame() as f64);
     st.out.load.add(f, st.solver.steps_per_frame());
-    pipeline::fill_stats(f, st.solver.params());
+    pipeline::fill_stats(f, st.solver.tunables(), &st.solver.tuning());
     st.out.splits += f.splits as u64;
     st.out.merges += f.merges as u64;
     st.out.sim_time = f.sim_time;

@@ -17,6 +17,7 @@ use super::sweep_plan::{self, SweepConfig, SweepSource};
 use crate::error::BadInput;
 use crate::pipeline;
 use crate::scene::Scene;
+use crate::solver::tunable::Tuning;
 use crate::stream::sink::{Recording, SinkChoice};
 use crate::stream::BlueprintCamera;
 
@@ -62,11 +63,15 @@ impl SweepCommand {
         );
         for c in configs {
             s.push_str(&format!(
-                "[{}:{}:{:?}:{:?}]",
+                "[{}:{}:{:?}:{:?}{}]",
                 c.label,
                 c.model.name(),
                 c.split,
-                c.merge
+                c.merge,
+                c.sets
+                    .iter()
+                    .map(|(n, v)| format!(":{n}={v:?}"))
+                    .collect::<String>()
             ));
         }
         s
@@ -356,8 +361,10 @@ fn run_all(
 
 /// One run, start to end, on the calling thread (Rerun's time cursor is per thread).
 fn run_one(job: &RunJob, k: usize, cfg: &SweepConfig) -> anyhow::Result<RunStats> {
-    let scene = job.scene.with_solver(cfg.model);
-    let mut solver = scene.solver_with(&cfg.params(&scene.loaded.style.sim));
+    let mut scene = job.scene.with_solver(cfg.model);
+    cfg.tuning(&Tuning::of(&scene.loaded.style))
+        .write_into(&mut scene.loaded.style);
+    let mut solver = scene.solver();
     solver.set_threads(job.threads);
     let mut log = RunLog::new(
         job.rec,
@@ -367,15 +374,11 @@ fn run_one(job: &RunJob, k: usize, cfg: &SweepConfig) -> anyhow::Result<RunStats
         job.strands,
         job.camera,
     )?;
-    let ignored = solver.ignored_params();
-    let swept_but_ignored: Vec<&str> = [
-        ("split_threshold", cfg.split.is_some()),
-        ("merge_velocity", cfg.merge.is_some()),
-    ]
-    .into_iter()
-    .filter(|(name, swept)| *swept && ignored.contains(name))
-    .map(|(name, _)| name)
-    .collect();
+    let swept_but_ignored: Vec<&str> = cfg
+        .swept()
+        .into_iter()
+        .filter(|name| crate::solver::tunable::find(solver.tunables(), name).is_none())
+        .collect();
     if !swept_but_ignored.is_empty() {
         let msg = format!(
             "model `{}` ignores {}: run {} differs from its neighbours in the label only",

@@ -1,6 +1,7 @@
 //! What a sweep runs: the configurations of `wisptree sweep`, from the cartesian product of its
-//! lists (`--model`, `--split`, `--merge`) or from a RON file of named variants, with their
-//! labels and the recording id all parts of one sweep share.
+//! lists (`--model`, `--set NAME=…` for any tunable of the chosen models' tables, and its
+//! aliases `--split`, `--merge`) or from a RON file of named variants, with their labels and the
+//! recording id all parts of one sweep share.
 //!
 //! Every mistake here is the user's: a [`BadInput`] (exit 2) naming the flag and the item, or
 //! the file, line, column and field, like the style loader.
@@ -8,9 +9,10 @@
 use std::path::{Path, PathBuf};
 
 use crate::error::BadInput;
+use crate::solver::tunable::{self, Tuning};
 use crate::solver::SolverKind;
 
-/// One configuration of a sweep: a solver and the AWT thresholds it overrides.
+/// One configuration of a sweep: a solver and the tunables it overrides.
 #[derive(Debug, Clone, PartialEq)]
 pub struct SweepConfig {
     /// `/runs/<label>`: only `[A-Za-z0-9_.-]`.
@@ -21,20 +23,51 @@ pub struct SweepConfig {
     pub split: Option<f64>,
     /// `sim.merge_velocity`, if the sweep sets it (else the style's).
     pub merge: Option<f64>,
+    /// The other tunables it sets (`--set NAME=…`), by their table names, in the order given.
+    pub sets: Vec<(&'static str, f64)>,
 }
 
 impl SweepConfig {
-    /// The style's parameters with this configuration's overrides.
-    pub fn params(&self, style: &crate::style::SimParams) -> crate::style::SimParams {
-        let mut p = style.clone();
+    /// The style's sections with this configuration's overrides; a value is set through the
+    /// model's own table entry of that name (else the first table that has it: a model that
+    /// does not read it ignores it, as single-level ignores the split threshold).
+    pub fn tuning(&self, style: &Tuning) -> Tuning {
+        let mut t = style.clone();
         if let Some(v) = self.split {
-            p.split_threshold = v;
+            t.sim.split_threshold = v;
         }
         if let Some(v) = self.merge {
-            p.merge_velocity = v;
+            t.sim.merge_velocity = v;
         }
-        p
+        for &(name, v) in &self.sets {
+            if let Some(e) = entry(self.model, name) {
+                (e.set)(&mut t, v);
+            }
+        }
+        t
     }
+
+    /// Every tunable the configuration sets, by name.
+    pub fn swept(&self) -> Vec<&'static str> {
+        let mut out = Vec::new();
+        if self.split.is_some() {
+            out.push("split_threshold");
+        }
+        if self.merge.is_some() {
+            out.push("merge_velocity");
+        }
+        out.extend(self.sets.iter().map(|(n, _)| *n));
+        out
+    }
+}
+
+/// The entry `name` of `model`'s table, else of any table.
+fn entry(model: SolverKind, name: &str) -> Option<&'static tunable::Tunable> {
+    tunable::find(model.tunables(), name).or_else(|| {
+        SolverKind::ALL
+            .iter()
+            .find_map(|k| tunable::find(k.tunables(), name))
+    })
 }
 
 /// The lists of a sweep as typed: comma-separated, or none.
@@ -46,6 +79,8 @@ pub struct SweepLists {
     pub split: Option<String>,
     /// `--merge 0.05,0.1`.
     pub merge: Option<String>,
+    /// `--set NAME=v1,v2,…`, each as typed (repeatable).
+    pub set: Vec<String>,
 }
 
 /// Whether `label` may name a run: non-empty, only `[A-Za-z0-9_.-]` (an entity path part).
@@ -71,6 +106,16 @@ fn threshold(v: f64) -> Result<f64, String> {
 /// Values print shortest-roundtrip (Rust's `{}` for `f64`), so a label is deterministic and
 /// reads the value back exactly; `1e-3` becomes `0.001`.
 pub fn label_of(model: SolverKind, split: Option<f64>, merge: Option<f64>) -> String {
+    label_with(model, split, merge, &[])
+}
+
+/// [`label_of`], then each other swept tunable as `_<name><value>`.
+pub fn label_with(
+    model: SolverKind,
+    split: Option<f64>,
+    merge: Option<f64>,
+    sets: &[(&str, f64)],
+) -> String {
     let mut s = model.name().to_owned();
     if let Some(v) = split {
         s.push_str(&format!("_split{v}"));
@@ -78,7 +123,46 @@ pub fn label_of(model: SolverKind, split: Option<f64>, merge: Option<f64>) -> St
     if let Some(v) = merge {
         s.push_str(&format!("_merge{v}"));
     }
+    for (name, v) in sets {
+        s.push_str(&format!("_{name}{v}"));
+    }
     s
+}
+
+/// One `--set NAME=v1,v2,…`: the tunable's name (checked against the chosen models' tables:
+/// at least one must have it) and its values (each checked against that entry's range).
+fn set_axis(text: &str, models: &[SolverKind]) -> Result<(&'static str, Vec<f64>), BadInput> {
+    let (name, _) = text.split_once('=').ok_or_else(|| {
+        BadInput(format!(
+            "--set `{text}`: expected NAME=v1,v2,… (for example --set split_threshold=0.1,0.2)"
+        ))
+    })?;
+    let name = name.trim();
+    let Some(&kind) = models
+        .iter()
+        .find(|k| tunable::find(k.tunables(), name).is_some())
+    else {
+        let tables: Vec<String> = models
+            .iter()
+            .map(|k| format!("{k}: {}", tunable::names(k.tunables())))
+            .collect();
+        return Err(BadInput(format!(
+            "--set: `{name}` is not a tunable of the swept model{} ({})",
+            if models.len() > 1 { "s" } else { "" },
+            tables.join("; ")
+        )));
+    };
+    let (e, values) =
+        tunable::parse_assignment(kind.tunables(), text, kind.name(), &Tuning::default())
+            .map_err(|e| BadInput(format!("--set: {e}")))?;
+    for (k, v) in values.iter().enumerate() {
+        if values[..k].contains(v) {
+            return Err(BadInput(format!(
+                "--set: {name} value `{v}` is listed twice (every configuration must differ)"
+            )));
+        }
+    }
+    Ok((e.name, values))
 }
 
 /// Splits one list flag into its items, each parsed by `parse`; empty items and duplicates
@@ -132,18 +216,49 @@ pub fn product(lists: &SweepLists) -> Result<Vec<SweepConfig>, BadInput> {
             None => vec![None],
         })
     };
-    let splits = opt_list("--split", &lists.split)?;
-    let merges = opt_list("--merge", &lists.merge)?;
-    let mut out = Vec::with_capacity(models.len() * splits.len() * merges.len());
+    let mut splits = opt_list("--split", &lists.split)?;
+    let mut merges = opt_list("--merge", &lists.merge)?;
+    // `--set` axes; `split_threshold` and `merge_velocity` are the lists of `--split`, `--merge`.
+    let mut axes: Vec<(&'static str, Vec<f64>)> = Vec::new();
+    for text in &lists.set {
+        let (name, values) = set_axis(text, &models)?;
+        let given = |flag: &str| BadInput(format!("--set {name}: given twice (also {flag})"));
+        match name {
+            "split_threshold" if lists.split.is_some() => return Err(given("as --split")),
+            "merge_velocity" if lists.merge.is_some() => return Err(given("as --merge")),
+            "split_threshold" => splits = values.into_iter().map(Some).collect(),
+            "merge_velocity" => merges = values.into_iter().map(Some).collect(),
+            _ if axes.iter().any(|(n, _)| *n == name) => return Err(given("by another --set")),
+            _ => axes.push((name, values)),
+        }
+    }
+    // Every combination of the `--set` axes, first axis outermost.
+    let mut combos: Vec<Vec<(&'static str, f64)>> = vec![Vec::new()];
+    for (name, values) in &axes {
+        combos = combos
+            .into_iter()
+            .flat_map(|c| {
+                values.iter().map(move |&v| {
+                    let mut c = c.clone();
+                    c.push((*name, v));
+                    c
+                })
+            })
+            .collect();
+    }
+    let mut out = Vec::with_capacity(models.len() * splits.len() * merges.len() * combos.len());
     for &model in &models {
         for &split in &splits {
             for &merge in &merges {
-                out.push(SweepConfig {
-                    label: label_of(model, split, merge),
-                    model,
-                    split,
-                    merge,
-                });
+                for sets in &combos {
+                    out.push(SweepConfig {
+                        label: label_with(model, split, merge, sets),
+                        model,
+                        split,
+                        merge,
+                        sets: sets.clone(),
+                    });
+                }
             }
         }
     }
@@ -267,6 +382,7 @@ pub fn parse_variants(path: &Path, text: &str) -> Result<Vec<SweepConfig>, BadIn
             model,
             split,
             merge,
+            sets: Vec::new(),
         });
     }
     Ok(out)

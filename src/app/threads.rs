@@ -21,7 +21,7 @@ use crate::frame::Frame;
 use crate::scene::Scene;
 use crate::stream::sink::{OpenSink, SinkWatcher, ViewerStatus};
 use crate::stream::{LoggerSetup, MessageLevel};
-use crate::web::{SharedState, WebCommand};
+use crate::web::{SetTunable, SharedState, WebCommand};
 
 /// Frames queued between the simulation and the logger. Small: live, a long queue is latency.
 const QUEUE_FRAMES: usize = 3;
@@ -66,8 +66,10 @@ pub struct LoopOptions {
 pub struct WebLink {
     /// The state the simulation thread publishes for the pages.
     pub shared: Arc<SharedState>,
-    /// The pages' checked requests.
+    /// The pages' checked requests but tunable values.
     pub commands: Receiver<WebCommand>,
+    /// The pages' tunable values, read by the simulation thread itself.
+    pub tunes: Receiver<SetTunable>,
 }
 
 /// The two worker threads and the channels the main thread keeps.
@@ -260,6 +262,7 @@ fn start_workers(
         tx: frame_tx,
         free: free_rx,
         shared: opts.web.as_ref().map(|w| Arc::clone(&w.shared)),
+        tunes: opts.web.as_ref().map(|w| w.tunes.clone()),
     };
     let sim = {
         let stop = stop.clone();
@@ -388,7 +391,8 @@ fn web_command(
     console: &Console,
 ) {
     let control = match cmd {
-        WebCommand::Set(param, value) => Control::Set(param, value),
+        // The page server sends tunable values to the simulation thread itself.
+        WebCommand::Set(..) => return,
         WebCommand::Pause(paused) => Control::Pause(paused),
         WebCommand::Restart => Control::Key(KeyAction::Restart),
         WebCommand::Motion(spec) => match current.with_motion(&spec) {

@@ -52,6 +52,8 @@ pub struct LiveRow {
     pub merge: Option<f64>,
     /// Rendering on (the render thread competing for the cores).
     pub render: bool,
+    /// Every tunable of the row's solver in force, by the names of its table.
+    pub params: std::collections::BTreeMap<&'static str, f64>,
     /// Simulated seconds ÷ wall seconds over the row's frames.
     pub realtime_factor: f64,
     /// The 95th-percentile wall time of a frame, ms.
@@ -88,13 +90,12 @@ pub struct LiveCase {
     pub render: bool,
 }
 
-/// The slider ends of the page's split threshold and merge velocity: (split, merge) overrides.
+/// The slider ends of the page's split threshold and merge velocity (the AWT's table of
+/// tunables): (split, merge) overrides.
 fn slider_ends() -> Vec<(Option<f64>, Option<f64>)> {
     let spec = |name: &str| {
-        crate::web::PARAMS
-            .iter()
-            .find(|p| p.name == name)
-            .unwrap_or_else(|| panic!("the control page has a `{name}` slider"))
+        crate::solver::tunable::find(SolverKind::Awt.tunables(), name)
+            .unwrap_or_else(|| panic!("the AWT has a `{name}` tunable"))
     };
     let (split, merge) = (spec("split_threshold"), spec("merge_velocity"));
     vec![
@@ -212,6 +213,13 @@ fn run_case(
         }
         _ => (None, None),
     };
+    let tuning = crate::solver::tunable::Tuning::of(&scene.loaded.style);
+    let params = case
+        .solver
+        .tunables()
+        .iter()
+        .map(|t| (t.name, t.value(&tuning)))
+        .collect();
     let (rec, memory) = Recording::memory()?;
     let opts = LoopOptions {
         seconds: Some(seconds),
@@ -246,6 +254,7 @@ fn run_case(
         split,
         merge,
         render: case.render,
+        params,
         realtime_factor: tempo.realtime_factor(),
         p95_frame_ms: tempo.frame_ms_quantile(0.95),
         mean_active: summary.load.mean_active(),

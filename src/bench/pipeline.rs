@@ -49,7 +49,7 @@ pub fn time_pipeline(
         builder.fill(&mut *solver, &mut frame);
         frame.index = index as u64;
         frame.realtime_factor = meter.frame_done(solver.dt() * solver.steps_per_frame() as f64);
-        crate::pipeline::fill_stats(&mut frame, solver.params());
+        crate::pipeline::fill_stats(&mut frame, solver.tunables(), &solver.tuning());
         let t2 = Instant::now();
         build_t += t2 - t1;
         logger.log_frame(&frame)?;

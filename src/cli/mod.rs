@@ -71,6 +71,28 @@ pub enum Command {
 /// clap's "unexpected argument '-1'".
 pub fn command() -> clap::Command {
     negative_numbers_are_values(Cli::command())
+        .mut_subcommand("sweep", |c| c.after_help(tunables_help()))
+}
+
+/// Every model's table of tunables, for `sweep --help` (`--set NAME=…`).
+fn tunables_help() -> String {
+    let mut s = String::from(
+        "Tunables for --set, by model (name: range and unit, as on the control page):\n",
+    );
+    for kind in crate::solver::SolverKind::ALL {
+        s.push_str(&format!("  {kind}:\n"));
+        for t in kind.tunables() {
+            s.push_str(&format!(
+                "    {}: {} – {} {}{}\n",
+                t.name,
+                t.min,
+                t.max,
+                t.unit,
+                if t.log { ", log scale" } else { "" }
+            ));
+        }
+    }
+    s
 }
 
 /// `cmd` and its subcommands with `allow_negative_numbers` on every option that takes a value.

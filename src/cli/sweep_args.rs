@@ -26,13 +26,21 @@ pub struct SweepArgs {
     pub seconds: f64,
 
     /// Split thresholds to sweep (`sim.split_threshold`, N·m·kg⁻¹, ≥ 0), comma-separated:
-    /// `--split 0.1,0.2,0.3`.
+    /// `--split 0.1,0.2,0.3` (the same as `--set split_threshold=0.1,0.2,0.3`).
     #[arg(long, value_name = "LIST", allow_hyphen_values = true)]
     pub split: Option<String>,
 
-    /// Merge velocity thresholds to sweep (`sim.merge_velocity`, m/s, ≥ 0), comma-separated.
+    /// Merge velocity thresholds to sweep (`sim.merge_velocity`, m/s, ≥ 0), comma-separated
+    /// (the same as `--set merge_velocity=…`).
     #[arg(long, value_name = "LIST", allow_hyphen_values = true)]
     pub merge: Option<String>,
+
+    /// A tunable of the swept model to sweep, by the name in its table, with its values:
+    /// `--set viscosity=0.5,50` (layered), `--set link_strength=100,300,900` (guides),
+    /// `--set split_threshold=0.1,0.2` (awt). Repeatable: every combination runs. The names
+    /// and ranges are the control page's sliders (`wisptree sweep --help` lists them below).
+    #[arg(long, value_name = "NAME=LIST", allow_hyphen_values = true)]
+    pub set: Vec<String>,
 
     /// Models to sweep, comma-separated: awt, single-level, layered, guides (default: awt).
     #[arg(long, value_name = "LIST")]
@@ -40,7 +48,7 @@ pub struct SweepArgs {
 
     /// Named variants instead of the lists: a RON file
     /// `[(label: "soft", split: 0.1, merge: 0.05, model: "awt"), …]` (every field optional).
-    #[arg(long, value_name = "FILE.ron", conflicts_with_all = ["split", "merge", "model"])]
+    #[arg(long, value_name = "FILE.ron", conflicts_with_all = ["split", "merge", "model", "set"])]
     pub variants: Option<PathBuf>,
 
     /// Run configuration K alone (from 0, in the order --list prints), for a batch scheduler:
@@ -96,6 +104,7 @@ impl SweepArgs {
                 model: self.model.clone(),
                 split: self.split.clone(),
                 merge: self.merge.clone(),
+                set: self.set.clone(),
             }),
         };
         SweepCommand {

@@ -31,7 +31,7 @@ fn run_fig5(
     sink: &mut dyn FrameSink,
 ) -> anyhow::Result<Vec<ExperimentRun>> {
     let path = Path::new("scenes/awt_fig5.ron");
-    let loaded = crate::style::parse(path, SCENE)?;
+    let loaded = crate::scene::parse_style(path, SCENE)?;
     let model = HairModel::from_style(&loaded)?;
     let scene = Scene::from_model(
         StyleSource::File(PathBuf::from(path)),

@@ -29,7 +29,7 @@ pub static CHANG_SHAKE: ExperimentDef = ExperimentDef {
 
 /// A compiled-in scene file (`scenes/….ron`, named `name` in errors): its style and model.
 pub(super) fn load_scene(name: &str, text: &str) -> anyhow::Result<(LoadedStyle, Arc<HairModel>)> {
-    let loaded = crate::style::parse(Path::new(name), text)?;
+    let loaded = crate::scene::parse_style(Path::new(name), text)?;
     let model = HairModel::from_style(&loaded)?;
     Ok((loaded, Arc::new(model)))
 }

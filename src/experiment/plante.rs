@@ -47,7 +47,7 @@ pub static PLANTE_FIG9: ExperimentDef = ExperimentDef {
 
 /// A scene file's style and model.
 fn load(name: &str, text: &str) -> anyhow::Result<(LoadedStyle, Arc<HairModel>)> {
-    let loaded = crate::style::parse(Path::new(name), text)?;
+    let loaded = crate::scene::parse_style(Path::new(name), text)?;
     let model = HairModel::from_style(&loaded)?;
     Ok((loaded, Arc::new(model)))
 }

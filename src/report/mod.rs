@@ -42,16 +42,6 @@ pub mod paths {
     /// Simulated seconds per wall second over the last second of frames: 1 is live, under 1
     /// slow motion (in a recording: how fast the run went). See [`super::tempo`].
     pub const REALTIME_FACTOR: &str = "/stats/realtime_factor";
-    /// The split threshold in force, N·m·kg⁻¹.
-    pub const SPLIT_THRESHOLD: &str = "/params/split_threshold";
-    /// The merge velocity threshold in force, m/s.
-    pub const MERGE_VELOCITY: &str = "/params/merge_velocity";
-    /// Friction α in force, s⁻¹.
-    pub const FRICTION: &str = "/params/friction";
-    /// Repulsion k_r in force, s⁻².
-    pub const REPULSION: &str = "/params/repulsion";
-    /// Mean wind speed in force, m/s.
-    pub const WIND_SPEED: &str = "/params/wind_speed";
 }
 
 /// Which adaptation happened.

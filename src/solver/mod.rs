@@ -17,6 +17,7 @@
 
 pub mod guides;
 pub mod layered;
+pub mod tunable;
 
 use std::sync::Arc;
 
@@ -25,7 +26,8 @@ use nalgebra::Vector3;
 use crate::frame::Frame;
 use crate::model::HairModel;
 use crate::motion::Pose;
-use crate::style::SimParams;
+use crate::style::{SimParams, Style};
+use tunable::{Tunable, Tuning};
 
 pub mod awt;
 
@@ -99,6 +101,16 @@ impl SolverKind {
             .ok_or_else(|| format!("unknown model `{s}` (expected one of: {})", Self::names()))
     }
 
+    /// Its one table of tunables: what a user may change while it runs.
+    pub fn tunables(self) -> &'static [Tunable] {
+        match self {
+            SolverKind::Awt => awt::tunables::AWT,
+            SolverKind::SingleLevel => awt::tunables::SINGLE_LEVEL,
+            SolverKind::Layered => layered::tunables::LAYERED,
+            SolverKind::Guides => guides::tunables::GUIDES,
+        }
+    }
+
     /// `awt, single-level, …`.
     pub fn names() -> String {
         Self::ALL
@@ -107,6 +119,15 @@ impl SolverKind {
             .collect::<Vec<_>>()
             .join(", ")
     }
+}
+
+/// Checks the style's sections of the layered and guide models by their solvers' rules; the
+/// dotted field path and the reason. Every loader above the solvers calls it (`scene`), so a
+/// bad value stops a command before it runs, whichever model it picks.
+pub fn check_sections(style: &Style) -> Result<(), (String, String)> {
+    guides::params::validate(&style.guides)?;
+    style.layered.validate()?;
+    Ok(())
 }
 
 impl std::fmt::Display for SolverKind {
@@ -153,6 +174,41 @@ pub trait Solver: Send {
     /// Applies new parameters from the next step on; the hair's state is kept. Parameters that
     /// the model does not use are listed by [`Solver::ignored_params`].
     fn set_params(&mut self, params: &SimParams);
+
+    /// Its tunables ([`SolverKind::tunables`]).
+    fn tunables(&self) -> &'static [Tunable] {
+        self.kind().tunables()
+    }
+
+    /// The values in force of everything its tunables read. The sections this model does not
+    /// read are their defaults.
+    fn tuning(&self) -> Tuning {
+        Tuning {
+            sim: self.params().clone(),
+            ..Tuning::default()
+        }
+    }
+
+    /// Applies the tunable values of `t` from the next step on; the hair's state is kept.
+    fn set_tuning(&mut self, t: &Tuning) {
+        self.set_params(&t.sim);
+    }
+
+    /// Sets the tunable `name` to `value` (checked against its table entry); returns the
+    /// value it replaced. The error is the message a user reads.
+    fn set_tunable(&mut self, name: &str, value: f64) -> Result<f64, String> {
+        let entry = tunable::find(self.tunables(), name).ok_or_else(|| {
+            format!(
+                "`{name}` is not a tunable of model {} (its tunables: {})",
+                self.kind(),
+                tunable::names(self.tunables())
+            )
+        })?;
+        let mut t = self.tuning();
+        let old = entry.apply(&mut t, value)?;
+        self.set_tuning(&t);
+        Ok(old)
+    }
 
     /// Names of the `sim:` fields this model ignores (the pipeline says so once).
     fn ignored_params(&self) -> &'static [&'static str] {

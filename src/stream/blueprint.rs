@@ -30,7 +30,7 @@ struct ViewSpec {
     /// Rerun view class identifier ("3D", "TimeSeries", "TextLog").
     class: &'static str,
     name: String,
-    contents: &'static [&'static str],
+    contents: Vec<String>,
 }
 
 pub(super) const SPATIAL_CONTENTS: &[&str] =
@@ -56,14 +56,25 @@ const COLLISION_CONTENTS: &[&str] = &[
     "- /stats/dropped_frames",
     "- /stats/realtime_factor",
 ];
-/// The thresholds share the energy's small scale; friction (≈ 30) and repulsion (≈ 2000) would
-/// flatten both, so they stay out of the plots (still in the recording, under `/params`).
-const ENERGY_CONTENTS: &[&str] = &[
-    "+ /stats/kinetic_energy",
-    "+ /params/split_threshold",
-    "+ /params/merge_velocity",
-    "+ /params/wind_speed",
-];
+/// The tunables of every solver's table whose range stays below this share the energy's small
+/// scale (the thresholds, the wind strength); friction (≈ 30), repulsion (≈ 2000) and the
+/// stiffnesses would flatten them, so they stay out of the plots (still in the recording, under
+/// `/params`).
+const SMALL_PARAM: f64 = 10.0;
+
+/// The kinetic energy and the small-ranged tunables of every solver (`/params/<name>`).
+fn energy_contents() -> Vec<String> {
+    let mut out = vec!["+ /stats/kinetic_energy".to_owned()];
+    for kind in crate::solver::SolverKind::ALL {
+        for t in kind.tunables() {
+            let line = format!("+ {}", t.path);
+            if t.max <= SMALL_PARAM && !out.contains(&line) {
+                out.push(line);
+            }
+        }
+    }
+    out
+}
 /// Milliseconds per step (1–10) would flatten the energy (J, ≪ 1) and the thresholds. The
 /// real-time factor sits beside the step time: a step over the frame's share of the wall clock
 /// is what makes the factor fall under 1.
@@ -83,6 +94,7 @@ fn layout(style_name: &str) -> (ViewSpec, [ViewSpec; 4], ViewSpec) {
     } else {
         format!("hair: {style_name}")
     };
+    let owned = |c: &[&str]| c.iter().map(|s| s.to_string()).collect::<Vec<_>>();
     let plot = |name: &str, contents| ViewSpec {
         class: "TimeSeries",
         name: name.to_owned(),
@@ -92,18 +104,18 @@ fn layout(style_name: &str) -> (ViewSpec, [ViewSpec; 4], ViewSpec) {
         ViewSpec {
             class: "3D",
             name: title,
-            contents: SPATIAL_CONTENTS,
+            contents: owned(SPATIAL_CONTENTS),
         },
         [
-            plot("nodes, splits, merges", NODE_CONTENTS),
-            plot("collisions and solver counts", COLLISION_CONTENTS),
-            plot("energy, parameters", ENERGY_CONTENTS),
-            plot("step time, real-time factor", TIMING_CONTENTS),
+            plot("nodes, splits, merges", owned(NODE_CONTENTS)),
+            plot("collisions and solver counts", owned(COLLISION_CONTENTS)),
+            plot("energy, parameters", energy_contents()),
+            plot("step time, real-time factor", owned(TIMING_CONTENTS)),
         ],
         ViewSpec {
             class: "TextLog",
             name: "events and log".to_owned(),
-            contents: LOG_CONTENTS,
+            contents: owned(LOG_CONTENTS),
         },
     )
 }
@@ -134,7 +146,7 @@ pub fn blueprint() -> rerun::blueprint::Blueprint {
             assert_eq!(v.class, "TimeSeries", "layout(): plots are time series");
             TimeSeriesView::new(v.name)
                 .with_origin("/")
-                .with_contents(v.contents.iter().copied())
+                .with_contents(v.contents.iter().map(String::as_str))
                 .into()
         })
         .collect();
@@ -142,14 +154,14 @@ pub fn blueprint() -> rerun::blueprint::Blueprint {
         Grid::new(plots).with_grid_columns(PLOT_COLUMNS).into(),
         TextLogView::new(log.name)
             .with_origin("/")
-            .with_contents(log.contents.iter().copied())
+            .with_contents(log.contents.iter().map(String::as_str))
             .into(),
     ];
     Blueprint::new(
         Horizontal::new([
             Spatial3DView::new(spatial.name)
                 .with_origin("/")
-                .with_contents(spatial.contents.iter().copied())
+                .with_contents(spatial.contents.iter().map(String::as_str))
                 .into(),
             Vertical::new(right).with_row_shares(ROW_SHARES).into(),
         ])
@@ -243,7 +255,7 @@ pub fn send_blueprint_with(
         let path = format!("view/{}", uuid_string(id));
         bp.log(
             format!("{path}/ViewContents"),
-            &ViewContents::new(v.contents.iter().map(|q| QueryExpression::from(*q))),
+            &ViewContents::new(v.contents.iter().map(|q| QueryExpression::from(q.as_str()))),
         )?;
         bp.log(
             path.as_str(),

@@ -64,7 +64,7 @@ pub(super) const STRAND_RADIUS_UI: f32 = 1.0;
 pub(super) const EVENT_RADIUS_UI: f32 = 6.0;
 
 /// Series names and colours of the stats every solver has.
-pub const COMMON_SERIES: [(&str, (u8, u8, u8), &str); 14] = {
+pub const COMMON_SERIES: [(&str, (u8, u8, u8), &str); 9] = {
     use crate::report::paths as p;
     [
         (p::SPLITS, SPLIT_COLOR, "splits"),
@@ -73,15 +73,6 @@ pub const COMMON_SERIES: [(&str, (u8, u8, u8), &str); 14] = {
         (p::PAIRS_IN_CONTACT, (255, 120, 200), "pairs in contact"),
         (p::BODY_CONTACTS, (120, 230, 140), "body contacts"),
         (p::KINETIC_ENERGY, (255, 210, 80), "kinetic energy (J)"),
-        (
-            p::SPLIT_THRESHOLD,
-            SPLIT_COLOR,
-            "split threshold (N·m·kg⁻¹)",
-        ),
-        (p::MERGE_VELOCITY, MERGE_COLOR, "merge velocity (m/s)"),
-        (p::FRICTION, (180, 140, 255), "friction α (1/s)"),
-        (p::REPULSION, (255, 140, 90), "repulsion k_r (1/s²)"),
-        (p::WIND_SPEED, (120, 200, 255), "wind (m/s)"),
         (p::STEP_MS, (200, 200, 210), "step (ms)"),
         (p::DROPPED_FRAMES, (255, 80, 80), "dropped frames"),
         (p::REALTIME_FACTOR, (120, 255, 180), "real-time factor (×)"),

@@ -420,7 +420,7 @@ impl Logger {
                     self.paths.named(st.path).clone(),
                     &SeriesLines::new()
                         .with_colors([Color::from_rgb(r, g, b)])
-                        .with_names([st.name().replace('_', " ")]),
+                        .with_names([series_name(st.path, st.name())]),
                 )?;
             }
             let path = self.paths.named(st.path).clone();
@@ -522,6 +522,17 @@ fn log_series_styles(rec: &RecordingStream, prefix: &str, levels: u16) -> anyhow
         )?;
     }
     Ok(())
+}
+
+/// The plot's name of a stat: a tunable (`/params/<name>`) by its table's label and unit, any
+/// other stat by its name.
+fn series_name(path: &str, name: &str) -> String {
+    crate::solver::SolverKind::ALL
+        .iter()
+        .flat_map(|k| k.tunables())
+        .find(|t| t.path == path)
+        .map(|t| format!("{} ({})", t.label, t.unit))
+        .unwrap_or_else(|| name.replace('_', " "))
 }
 
 /// One line per event: what, where in the hierarchy, and the value that triggered it.

@@ -2,8 +2,8 @@
 //! The stat paths are defined once, in [`crate::report::paths`]; the solvers set them.
 
 pub use crate::report::paths::{
-    BODY_CONTACTS, DROPPED_FRAMES, KINETIC_ENERGY, MERGES as STAT_MERGES, MERGE_VELOCITY,
-    PAIRS_IN_CONTACT, PAIRS_TESTED, SPLITS as STAT_SPLITS, SPLIT_THRESHOLD, STEP_MS,
+    BODY_CONTACTS, DROPPED_FRAMES, KINETIC_ENERGY, MERGES as STAT_MERGES, PAIRS_IN_CONTACT,
+    PAIRS_TESTED, SPLITS as STAT_SPLITS, STEP_MS,
 };
 
 /// The AWT's active nodes (a solver's nodes are at [`nodes`]).

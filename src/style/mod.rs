@@ -6,9 +6,11 @@
 
 pub mod builtin;
 pub mod generate;
+pub mod guides_section;
 pub mod hair_file;
 pub mod hairsalon;
 pub mod import;
+pub mod layered_section;
 pub mod render_params;
 pub mod schema;
 pub mod tfx;
@@ -16,6 +18,8 @@ pub mod tfx_write;
 
 use std::path::{Path, PathBuf};
 
+pub use guides_section::{GuideParams, MovingSphere, PathKey, StripLayout};
+pub use layered_section::LayeredParams;
 pub use render_params::RenderParams;
 pub use schema::*;
 
@@ -285,6 +289,17 @@ fn explicit_hair(e: &Explicit) -> RawHair {
 }
 
 /// Best-effort line number of the first `leaf:` of a dotted field path in the text.
+/// The error for `field` of the style at `path` (its text, if at hand, gives the line): for
+/// the checks that the layers above make of a loaded style (the solvers' sections).
+pub fn field_error(path: &Path, text: Option<&str>, field: &str, msg: String) -> StyleError {
+    StyleError::Invalid {
+        path: path.to_path_buf(),
+        line: text.and_then(|t| line_of_field(t, field)),
+        field: field.to_string(),
+        msg,
+    }
+}
+
 fn line_of_field(text: &str, field: &str) -> Option<usize> {
     let leaf = field
         .rsplit('.')
@@ -598,13 +613,11 @@ fn validate_hair(style: &Style) -> Result<(), Invalid> {
     Ok(())
 }
 
-/// The sections of the other models and the renderer.
+/// The renderer's section, and where the layered model's level sits in the hierarchy. The
+/// values of the `layered:` and `guides:` sections are checked by their solvers
+/// (`solver::check_sections`, called by every loader above the solvers: `scene`).
 fn validate_models(style: &Style) -> Result<(), Invalid> {
-    crate::solver::guides::params::validate(&style.guides)?;
-
     style.render.validate()?;
-
-    style.layered.validate()?;
     check(
         style.layered.level < style.hierarchy.levels.max(1) || style.layered.level == 1,
         "layered.level",

@@ -36,17 +36,17 @@ pub struct Style {
     #[serde(default)]
     pub sim: SimParams,
     /// Parameters of the layered wisp model (`--model layered`). Default:
-    /// [`LayeredParams::default`](crate::solver::layered::LayeredParams::default).
+    /// [`LayeredParams::default`](super::LayeredParams::default).
     #[serde(default)]
-    pub layered: crate::solver::layered::LayeredParams,
+    pub layered: super::LayeredParams,
     /// How the hair is rendered (shading, shadows, antialiasing). Default:
     /// [`RenderParams::default`](super::RenderParams).
     #[serde(default)]
     pub render: super::RenderParams,
     /// The guide-strand model's parameters (`--model guides`). Default:
-    /// [`crate::solver::guides::GuideParams::default`].
+    /// [`GuideParams::default`](super::GuideParams::default).
     #[serde(default)]
-    pub guides: crate::solver::guides::GuideParams,
+    pub guides: super::GuideParams,
 }
 
 fn default_seed() -> u64 {
@@ -570,6 +570,58 @@ pub struct Wind {
     /// Gust wavelength, m. Default 2.
     #[serde(default = "d_gust_wavelength")]
     pub wavelength: f64,
+    /// The strength set while running (the control page's wind slider) and the wind it
+    /// scales; never in a file.
+    #[serde(skip)]
+    pub strength: Option<WindStrength>,
+}
+
+/// A wind strength in force and the wind it scales: the style's own, or 1 m/s along +x when
+/// the style has none (so that the strength always does something).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct WindStrength {
+    /// The factor.
+    pub factor: f64,
+    /// The velocity at factor 1, m/s.
+    pub velocity: Vec3,
+    /// The gust amplitude at factor 1, m/s.
+    pub gust: f64,
+}
+
+impl Wind {
+    /// Whether the style has any wind.
+    fn blows(&self) -> bool {
+        self.velocity.iter().any(|v| *v != 0.0) || self.gust != 0.0
+    }
+
+    /// The strength in force: as set, else 1 for a style with wind and 0 without.
+    pub fn strength(&self) -> f64 {
+        match self.strength {
+            Some(s) => s.factor,
+            None => f64::from(u8::from(self.blows())),
+        }
+    }
+
+    /// Scales the wind this strength started from (the style's, or 1 m/s along +x) by
+    /// `factor`.
+    pub fn set_strength(&mut self, factor: f64) {
+        let base = self.strength.unwrap_or(if self.blows() {
+            WindStrength {
+                factor: 1.0,
+                velocity: self.velocity,
+                gust: self.gust,
+            }
+        } else {
+            WindStrength {
+                factor: 0.0,
+                velocity: [1.0, 0.0, 0.0],
+                gust: 0.0,
+            }
+        });
+        self.velocity = base.velocity.map(|v| v * factor);
+        self.gust = base.gust * factor;
+        self.strength = Some(WindStrength { factor, ..base });
+    }
 }
 
 impl Default for Wind {
@@ -579,6 +631,7 @@ impl Default for Wind {
             gust: 0.0,
             frequency: d_gust_frequency(),
             wavelength: d_gust_wavelength(),
+            strength: None,
         }
     }
 }

@@ -2,13 +2,15 @@
 //!
 //! The stock viewer cannot host custom widgets (Rerun issue #2337) or send anything back to the
 //! program (#2691), so wisptree serves its own page: the viewer embedded on one side, sliders
-//! and buttons on the other. The page's requests are checked here ([`protocol`]) and handed to
-//! the run as [`WebCommand`]s, which take the same path as the terminal keys and the style
-//! reload; the simulation thread publishes what is in force into a [`SharedState`] that every
-//! open page reads. No physics and no Rerun here.
+//! and buttons on the other. The page's requests are checked here ([`protocol`]) against the
+//! running solver's table of tunables, which the simulation thread publishes with the values in
+//! force into a [`SharedState`] that every open page reads. A tunable's new value goes straight
+//! to the simulation thread on a channel of its own ([`SetTunable`]); the other requests
+//! (pause, restart, motion, model) are handed to the run as [`WebCommand`]s. No physics and no
+//! Rerun here.
 
 pub mod protocol;
 pub mod server;
 
-pub use protocol::{Controls, LiveState, Param, ParamValues, SharedState, WebCommand, PARAMS};
+pub use protocol::{Controls, LiveState, SetTunable, SharedState, WebCommand};
 pub use server::{ControlPage, PageConfig};

@@ -2,109 +2,17 @@
 //! ranges, the few requests the page may send (checked here, before anything reaches the
 //! simulation), and the live state every open page shows.
 //!
-//! The page builds its sliders from [`PARAMS`], so the ranges are written once.
+//! The page builds its sliders from the running solver's table of tunables, which the state
+//! carries ([`LiveState::tunables`]): the ranges are written once, in the solver's table, and
+//! switching model rebuilds the sliders.
 
 use std::collections::VecDeque;
 use std::sync::Mutex;
 
 use serde::{Deserialize, Serialize};
 
+use crate::solver::tunable::TunableView;
 use crate::solver::SolverKind;
-
-/// A parameter the page can set.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
-#[serde(rename_all = "snake_case")]
-pub enum Param {
-    /// The split threshold on |acceleration| × radius (AWT §3.1), N·m·kg⁻¹.
-    SplitThreshold,
-    /// The merge velocity threshold (AWT §3.2), m/s.
-    MergeVelocity,
-    /// Friction α of hair–hair interaction (AWT §4.2), s⁻¹; α·dt must stay < 1.
-    Friction,
-    /// Repulsion k_r between segments crossing at a large angle (AWT §4.2), s⁻².
-    Repulsion,
-    /// Wind strength: a factor on the style's wind, or m/s along +x when the style has none.
-    Wind,
-}
-
-/// A slider: its parameter, what the page calls it, and its range.
-#[derive(Debug, Clone, Copy, Serialize)]
-pub struct ParamSpec {
-    /// The name in requests and in the state (`split_threshold`, …).
-    pub name: &'static str,
-    /// Which parameter.
-    #[serde(skip)]
-    pub param: Param,
-    /// The label beside the slider.
-    pub label: &'static str,
-    /// The unit shown after the value.
-    pub unit: &'static str,
-    /// Smallest accepted value.
-    pub min: f64,
-    /// Largest accepted value.
-    pub max: f64,
-    /// The slider moves on a log scale.
-    pub log: bool,
-}
-
-/// Every parameter the page can set, in the order it shows them.
-pub const PARAMS: &[ParamSpec] = &[
-    ParamSpec {
-        name: "split_threshold",
-        param: Param::SplitThreshold,
-        label: "split threshold",
-        unit: "N·m·kg⁻¹",
-        min: 0.05,
-        max: 1.0,
-        log: true,
-    },
-    ParamSpec {
-        name: "merge_velocity",
-        param: Param::MergeVelocity,
-        label: "merge velocity threshold",
-        unit: "m/s",
-        min: 0.005,
-        max: 1.0,
-        log: true,
-    },
-    ParamSpec {
-        name: "friction",
-        param: Param::Friction,
-        label: "friction α",
-        unit: "s⁻¹",
-        min: 0.0,
-        max: 1000.0,
-        log: false,
-    },
-    ParamSpec {
-        name: "repulsion",
-        param: Param::Repulsion,
-        label: "repulsion k_r",
-        unit: "s⁻²",
-        min: 0.0,
-        max: 20000.0,
-        log: false,
-    },
-    ParamSpec {
-        name: "wind",
-        param: Param::Wind,
-        label: "wind strength",
-        unit: "×",
-        min: 0.0,
-        max: 5.0,
-        log: false,
-    },
-];
-
-impl Param {
-    /// Its slider.
-    pub fn spec(self) -> &'static ParamSpec {
-        PARAMS
-            .iter()
-            .find(|s| s.param == self)
-            .expect("every parameter has a spec")
-    }
-}
 
 /// A request as the page sends it (JSON, `type` names the kind). Anything else is refused.
 #[derive(Debug, Clone, Deserialize)]
@@ -113,7 +21,7 @@ pub enum WebRequest {
     /// Set one parameter. The value stays untyped here so that a non-number is refused with its
     /// own message.
     Set {
-        /// A name from [`PARAMS`].
+        /// A tunable of the running model ([`LiveState::tunables`]).
         param: String,
         /// The new value.
         value: serde_json::Value,
@@ -141,8 +49,8 @@ pub enum WebRequest {
 /// A checked request: what the simulation is asked to do.
 #[derive(Debug, Clone, PartialEq)]
 pub enum WebCommand {
-    /// Set a parameter to a value inside its range.
-    Set(Param, f64),
+    /// Set a tunable of the running model (by its table name) to a value its entry allows.
+    Set(String, f64),
     /// Pause or resume.
     Pause(bool),
     /// Restart with the parameters in force.
@@ -151,6 +59,16 @@ pub enum WebCommand {
     Motion(String),
     /// Restart with this model.
     Model(SolverKind),
+}
+
+/// A tunable's new value, checked against the running model's table as the page was shown it:
+/// what the page server sends the simulation thread directly.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SetTunable {
+    /// The table name.
+    pub name: String,
+    /// The value.
+    pub value: f64,
 }
 
 /// Parses and checks one request body against the state in force (the time step bounds the
@@ -165,29 +83,24 @@ pub fn parse_request(body: &str, state: &LiveState) -> Result<WebCommand, String
 pub fn check_request(req: WebRequest, state: &LiveState) -> Result<WebCommand, String> {
     match req {
         WebRequest::Set { param, value } => {
-            let spec = PARAMS
+            let spec = state
+                .tunables
                 .iter()
                 .find(|s| s.name == param)
-                .ok_or_else(|| format!("no parameter `{param}`"))?;
+                .ok_or_else(|| {
+                    let names: Vec<&str> = state.tunables.iter().map(|t| t.name).collect();
+                    format!(
+                        "no parameter `{param}` for model {} (its tunables: {})",
+                        state.model,
+                        names.join(", ")
+                    )
+                })?;
             let v = value
                 .as_f64()
                 .filter(|v| v.is_finite())
                 .ok_or_else(|| format!("{}: `{value}` is not a number", spec.label))?;
-            if !(spec.min..=spec.max).contains(&v) {
-                return Err(format!(
-                    "{} {v} refused: it must be between {} and {} {}",
-                    spec.label, spec.min, spec.max, spec.unit
-                ));
-            }
-            if spec.param == Param::Friction && v * state.dt >= 1.0 {
-                return Err(format!(
-                    "friction α {v} refused: α·dt must stay below 1 so friction never reverses a \
-                     relative motion (AWT §4.2); with dt = {} s, α·dt = {:.3}",
-                    state.dt,
-                    v * state.dt
-                ));
-            }
-            Ok(WebCommand::Set(spec.param, v))
+            spec.check(v)?;
+            Ok(WebCommand::Set(spec.name.to_owned(), v))
         }
         WebRequest::Pause { paused } => Ok(WebCommand::Pause(paused)),
         WebRequest::Restart {} => Ok(WebCommand::Restart),
@@ -203,21 +116,6 @@ pub fn check_request(req: WebRequest, state: &LiveState) -> Result<WebCommand, S
         }
         WebRequest::Model { name } => SolverKind::parse(&name).map(WebCommand::Model),
     }
-}
-
-/// The values the page shows for each parameter.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
-pub struct ParamValues {
-    /// See [`Param::SplitThreshold`].
-    pub split_threshold: f64,
-    /// See [`Param::MergeVelocity`].
-    pub merge_velocity: f64,
-    /// See [`Param::Friction`].
-    pub friction: f64,
-    /// See [`Param::Repulsion`].
-    pub repulsion: f64,
-    /// See [`Param::Wind`].
-    pub wind: f64,
 }
 
 /// One line of the run's log, as the page lists it.
@@ -245,10 +143,10 @@ pub struct LiveState {
     pub model: String,
     /// The motion in force.
     pub motion: String,
-    /// The parameters in force.
-    pub params: ParamValues,
-    /// The integration step, s (friction must keep α·dt < 1).
-    pub dt: f64,
+    /// The running model's tunables (its table) and their values in force.
+    pub tunables: Vec<TunableView>,
+    /// The same values by name (`params.split_threshold`), for scripts reading the state.
+    pub params: std::collections::BTreeMap<&'static str, f64>,
     /// Simulated over wall seconds over the last second (1: live).
     pub realtime_factor: f64,
     /// The real-time factor when the running simulation cannot keep up (the page's state line
@@ -286,7 +184,7 @@ impl SharedState {
     }
 
     /// Publishes the controls' values; the version moves only if one changed.
-    pub fn publish(&self, controls: Controls<'_>, sim_time: f64, realtime_factor: f64) {
+    pub fn publish(&self, controls: &Controls<'_>, sim_time: f64, realtime_factor: f64) {
         let mut s = self.lock();
         s.sim_time = sim_time;
         s.realtime_factor = realtime_factor;
@@ -295,14 +193,17 @@ impl SharedState {
         let changed = s.paused != controls.paused
             || s.model != controls.model
             || s.motion != controls.motion
-            || s.params != controls.params
-            || s.dt != controls.dt;
+            || s.tunables != controls.tunables;
         if changed {
             s.paused = controls.paused;
             s.model = controls.model.to_owned();
             s.motion = controls.motion.to_owned();
-            s.params = controls.params;
-            s.dt = controls.dt;
+            s.tunables.clone_from(&controls.tunables);
+            s.params = controls
+                .tunables
+                .iter()
+                .map(|t| (t.name, t.value))
+                .collect();
             s.version += 1;
         }
     }
@@ -328,7 +229,7 @@ impl SharedState {
 }
 
 /// The values [`SharedState::publish`] takes.
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone)]
 pub struct Controls<'a> {
     /// Paused.
     pub paused: bool,
@@ -336,19 +237,25 @@ pub struct Controls<'a> {
     pub model: &'a str,
     /// The motion's name.
     pub motion: &'a str,
-    /// The parameters in force.
-    pub params: ParamValues,
-    /// The integration step, s.
-    pub dt: f64,
+    /// The running model's tunables and their values.
+    pub tunables: Vec<TunableView>,
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
 
+    use crate::solver::tunable::Tuning;
+
+    /// The state of an AWT run at the defaults (dt = 0.01 s).
     fn state() -> LiveState {
+        state_of(SolverKind::Awt, &Tuning::default())
+    }
+
+    fn state_of(kind: SolverKind, t: &Tuning) -> LiveState {
         LiveState {
-            dt: 0.01,
+            model: kind.name().into(),
+            tunables: kind.tunables().iter().map(|e| e.view(t)).collect(),
             motions: vec!["still".into(), "lean".into()],
             ..LiveState::default()
         }
@@ -360,7 +267,7 @@ mod tests {
             r#"{"type":"set","param":"split_threshold","value":0.25}"#,
             &state(),
         );
-        assert_eq!(c, Ok(WebCommand::Set(Param::SplitThreshold, 0.25)));
+        assert_eq!(c, Ok(WebCommand::Set("split_threshold".into(), 0.25)));
     }
 
     #[test]
@@ -388,7 +295,12 @@ mod tests {
             ),
             (
                 r#"{"type":"set","param":"gravity","value":1}"#,
-                "no parameter `gravity`",
+                "no parameter `gravity` for model awt",
+            ),
+            // Another model's tunable is not the AWT's.
+            (
+                r#"{"type":"set","param":"viscosity","value":1}"#,
+                "its tunables: split_threshold",
             ),
         ] {
             let e = parse_request(body, &state()).unwrap_err();
@@ -399,14 +311,44 @@ mod tests {
     #[test]
     fn friction_must_keep_alpha_dt_below_one() {
         let ok = parse_request(r#"{"type":"set","param":"friction","value":99}"#, &state());
-        assert_eq!(ok, Ok(WebCommand::Set(Param::Friction, 99.0)));
+        assert_eq!(ok, Ok(WebCommand::Set("friction".into(), 99.0)));
         let e = parse_request(r#"{"type":"set","param":"friction","value":100}"#, &state())
             .unwrap_err();
         assert!(e.contains("α·dt"), "{e}");
-        let mut fine_dt = state();
-        fine_dt.dt = 0.001;
+        let mut t = Tuning::default();
+        t.sim.dt = 0.001;
+        let fine_dt = state_of(SolverKind::Awt, &t);
         let ok = parse_request(r#"{"type":"set","param":"friction","value":500}"#, &fine_dt);
-        assert_eq!(ok, Ok(WebCommand::Set(Param::Friction, 500.0)));
+        assert_eq!(ok, Ok(WebCommand::Set("friction".into(), 500.0)));
+    }
+
+    #[test]
+    fn the_layered_and_guide_models_take_their_own_tunables() {
+        let layered = state_of(SolverKind::Layered, &Tuning::default());
+        assert_eq!(
+            parse_request(r#"{"type":"set","param":"viscosity","value":50}"#, &layered),
+            Ok(WebCommand::Set("viscosity".into(), 50.0))
+        );
+        let e = parse_request(
+            r#"{"type":"set","param":"split_threshold","value":0.2}"#,
+            &layered,
+        )
+        .unwrap_err();
+        assert!(e.contains("for model layered"), "{e}");
+        let guides = state_of(SolverKind::Guides, &Tuning::default());
+        assert_eq!(
+            parse_request(
+                r#"{"type":"set","param":"link_strength","value":600}"#,
+                &guides
+            ),
+            Ok(WebCommand::Set("link_strength".into(), 600.0))
+        );
+        let e = parse_request(r#"{"type":"set","param":"strip_break","value":1}"#, &guides)
+            .unwrap_err();
+        assert!(
+            e.contains("strip break ratio") && e.contains("between"),
+            "{e}"
+        );
     }
 
     #[test]
@@ -442,15 +384,21 @@ mod tests {
             paused: false,
             model: "awt",
             motion: "lean",
-            params: ParamValues::default(),
-            dt: 0.01,
+            tunables: vec![],
         };
-        s.publish(c, 0.0, 1.0);
+        s.publish(&c, 0.0, 1.0);
         let v = s.snapshot().version;
-        s.publish(c, 1.0, 0.5);
+        s.publish(&c, 1.0, 0.5);
         assert_eq!(s.snapshot().version, v);
         assert_eq!(s.snapshot().sim_time, 1.0);
-        s.publish(Controls { paused: true, ..c }, 1.0, 1.0);
+        s.publish(
+            &Controls {
+                paused: true,
+                ..c.clone()
+            },
+            1.0,
+            1.0,
+        );
         assert_eq!(s.snapshot().version, v + 1);
         s.log("hello");
         assert_eq!(
@@ -466,17 +414,23 @@ mod tests {
             paused: false,
             model: "guides",
             motion: "shake",
-            params: ParamValues::default(),
-            dt: 0.01,
+            tunables: vec![],
         };
-        s.publish(c, 1.0, 0.4);
+        s.publish(&c, 1.0, 0.4);
         assert_eq!(s.snapshot().slow_motion, Some(0.4));
         assert_eq!(s.snapshot().realtime_factor, 0.4);
         // Keeping up (a paced run reads 1 within its sleeps' jitter): no slow motion.
-        s.publish(c, 2.0, 0.995);
+        s.publish(&c, 2.0, 0.995);
         assert_eq!(s.snapshot().slow_motion, None);
         // Paused: nothing moves, so nothing is slow.
-        s.publish(Controls { paused: true, ..c }, 2.0, 0.1);
+        s.publish(
+            &Controls {
+                paused: true,
+                ..c.clone()
+            },
+            2.0,
+            0.1,
+        );
         assert_eq!(s.snapshot().slow_motion, None);
     }
 }

@@ -15,12 +15,13 @@ use anyhow::Context as _;
 use crossbeam_channel::Sender;
 use tiny_http::{Header, Method, Request, Response, Server};
 
-use super::protocol::{self, SharedState, WebCommand, PARAMS};
+use super::protocol::{self, SetTunable, SharedState, WebCommand};
 
 /// The largest request body taken (the page's requests are under 100 bytes).
 const MAX_BODY: usize = 4096;
 
-/// The page, with `__VIEWER_PORT__` and `__PARAMS__` filled in when served.
+/// The page, with `__VIEWER_PORT__` and `__GRPC_PORT__` filled in when served (its sliders
+/// come with the state: the running model's tunables).
 const PAGE: &str = include_str!("page.html");
 
 /// Where the control page listens and what it embeds.
@@ -44,12 +45,14 @@ pub struct ControlPage {
 }
 
 impl ControlPage {
-    /// Binds the page's port and serves it on a thread of its own. Checked requests go to
+    /// Binds the page's port and serves it on a thread of its own. A checked tunable value
+    /// goes to `tunes` (read by the simulation thread), the other checked requests to
     /// `commands`; the page reads `state`.
     pub fn start(
         cfg: PageConfig,
         state: Arc<SharedState>,
         commands: Sender<WebCommand>,
+        tunes: Sender<SetTunable>,
     ) -> anyhow::Result<ControlPage> {
         let server = Server::http(SocketAddr::new(cfg.bind, cfg.port))
             .map_err(|e| anyhow::anyhow!("{e}"))
@@ -65,6 +68,7 @@ impl ControlPage {
             page: page_html(&cfg),
             state,
             commands,
+            tunes,
         };
         let thread = {
             let server = Arc::clone(&server);
@@ -121,10 +125,8 @@ fn allowed_hosts(bind: IpAddr, port: u16) -> Vec<String> {
 
 /// The page with its ports and sliders filled in.
 fn page_html(cfg: &PageConfig) -> String {
-    let params = serde_json::to_string(PARAMS).unwrap_or_else(|_| "[]".into());
     PAGE.replace("__VIEWER_PORT__", &cfg.viewer_port.to_string())
         .replace("__GRPC_PORT__", &cfg.grpc_port.to_string())
-        .replace("__PARAMS__", &params)
 }
 
 /// What the server thread owns.
@@ -134,6 +136,7 @@ struct Serving {
     page: String,
     state: Arc<SharedState>,
     commands: Sender<WebCommand>,
+    tunes: Sender<SetTunable>,
 }
 
 /// A reply: status and JSON or HTML body.
@@ -229,12 +232,15 @@ impl Serving {
         if read.is_err() || body.len() > MAX_BODY {
             return Reply::error(400, "refused: unreadable or too large body");
         }
-        match protocol::parse_request(&body, &self.state.snapshot()) {
-            Ok(cmd) => match self.commands.send(cmd) {
-                Ok(()) => Reply::json(200, serde_json::json!({ "ok": true })),
-                Err(_) => Reply::error(503, "the simulation has ended"),
-            },
-            Err(msg) => Reply::error(400, msg),
+        let sent = match protocol::parse_request(&body, &self.state.snapshot()) {
+            Ok(WebCommand::Set(name, value)) => self.tunes.send(SetTunable { name, value }).is_ok(),
+            Ok(cmd) => self.commands.send(cmd).is_ok(),
+            Err(msg) => return Reply::error(400, msg),
+        };
+        if sent {
+            Reply::json(200, serde_json::json!({ "ok": true }))
+        } else {
+            Reply::error(503, "the simulation has ended")
         }
     }
 }

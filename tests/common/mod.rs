@@ -8,7 +8,7 @@ use nalgebra::Point3;
 use wisptree::model::HairModel;
 use wisptree::motion::Motion;
 use wisptree::solver::awt::Simulation;
-use wisptree::style::{self, LoadedStyle, RawHair, RawStrand};
+use wisptree::style::{LoadedStyle, RawHair, RawStrand};
 
 pub mod shared;
 
@@ -94,7 +94,8 @@ pub fn synthetic_model(
     length: f64,
     seed: u64,
 ) -> (LoadedStyle, Arc<HairModel>) {
-    let loaded = style::parse(Path::new("synthetic.ron"), text).expect("fixture style parses");
+    let loaded = wisptree::scene::parse_style(Path::new("synthetic.ron"), text)
+        .expect("fixture style parses");
     let hair = synthetic_hair(strands, length, seed);
     let model = HairModel::build(&loaded, &hair);
     (loaded, Arc::new(model))
@@ -113,7 +114,7 @@ pub fn synthetic_sim(text: &str, strands: usize, motion_name: &str) -> Simulatio
 /// Loads a shipped style and builds its model.
 pub fn shipped(name: &str) -> (LoadedStyle, Arc<HairModel>) {
     let path = root().join("styles").join(name);
-    let loaded = style::load(&path).unwrap_or_else(|e| panic!("{e}"));
+    let loaded = wisptree::scene::load_style(&path).unwrap_or_else(|e| panic!("{e}"));
     let model = HairModel::from_style(&loaded).unwrap_or_else(|e| panic!("{e}"));
     (loaded, Arc::new(model))
 }

@@ -19,6 +19,7 @@ pub mod dynamics;
 pub mod forest;
 mod slots;
 mod step;
+pub mod tunables;
 
 pub use slots::{Segments, Slots};
 

@@ -73,7 +73,7 @@ pub(super) fn draw(s: &GuideSolver, f: &mut Frame) {
     let obs = f.primitives(OBSTACLES_PATH, PrimitiveKind::LineStrips);
     obs.radius_ui = 1.0;
     for o in &s.gp.obstacles {
-        let p = o.posed(s.time);
+        let p = super::obstacle::posed(o, s.time);
         for axis in 0..3 {
             let pts = (0..=CIRCLE).map(|k| {
                 let a = std::f64::consts::TAU * k as f64 / CIRCLE as f64;

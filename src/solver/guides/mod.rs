@@ -16,6 +16,7 @@ pub mod obstacle;
 pub mod params;
 mod solve;
 pub mod strips;
+pub mod tunables;
 
 use std::sync::Arc;
 
@@ -397,7 +398,7 @@ impl GuideSolver {
         // While settling, the obstacles stay where they start.
         let t = if self.settling { 0.0 } else { t };
         for o in &self.gp.obstacles {
-            self.spheres.push(o.posed(t));
+            self.spheres.push(obstacle::posed(o, t));
         }
     }
 

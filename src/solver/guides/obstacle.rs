@@ -8,70 +8,18 @@
 //! or slide with friction, penetrations are undone root to tip).
 
 use nalgebra::Vector3;
-use serde::{Deserialize, Serialize};
 
 use super::body::PosedSphere;
+pub use crate::style::guides_section::{MovingSphere, PathKey};
 
-/// One key of an obstacle's path.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct PathKey {
-    /// Seconds from the start of the run (after settling), ≥ 0, strictly increasing.
-    pub time: f64,
-    /// Centre of the sphere at that time, world coordinates, m.
-    pub center: [f64; 3],
-}
-
-/// A sphere on a keyframed path: `(radius: 0.05, path: [(time: 0, center: (x, y, z)), …])`.
-///
-/// Between two keys the centre eases in and out (a cubic Hermite segment with zero end
-/// tangents), so position and velocity are continuous and the velocity is the exact
-/// derivative of the position; the sphere is at rest at every key, before the first and after
-/// the last. A single key is a still sphere.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct MovingSphere {
-    /// Radius, m.
-    pub radius: f64,
-    /// The keys of its centre path (at least one).
-    pub path: Vec<PathKey>,
-}
-
-impl MovingSphere {
-    /// Centre and velocity at time `t`.
-    pub fn center_at(&self, t: f64) -> (Vector3<f64>, Vector3<f64>) {
-        let p = &self.path;
-        let at = |k: usize| Vector3::from(p[k].center);
-        let j = p.partition_point(|k| k.time <= t);
-        if j == 0 {
-            return (at(0), Vector3::zeros());
-        }
-        if j == p.len() {
-            return (at(p.len() - 1), Vector3::zeros());
-        }
-        let (a, b) = (&p[j - 1], &p[j]);
-        let span = b.time - a.time;
-        let u = (t - a.time) / span;
-        let d = at(j) - at(j - 1);
-        let s = u * u * (3.0 - 2.0 * u);
-        let ds = 6.0 * u * (1.0 - u) / span;
-        (at(j - 1) + d * s, d * ds)
-    }
-
-    /// The sphere posed at time `t`, as the body collision takes it.
-    pub fn posed(&self, t: f64) -> PosedSphere {
-        let (center, velocity) = self.center_at(t);
-        PosedSphere {
-            center,
-            radius: self.radius,
-            velocity,
-            spin: Vector3::zeros(),
-        }
-    }
-
-    /// Time of the last key: the sphere is still from then on.
-    pub fn stop_time(&self) -> f64 {
-        self.path.last().map_or(0.0, |k| k.time)
+/// Obstacle `o` posed at time `t`, as the body collision takes it.
+pub fn posed(o: &MovingSphere, t: f64) -> PosedSphere {
+    let (center, velocity) = o.center_at(t);
+    PosedSphere {
+        center,
+        radius: o.radius,
+        velocity,
+        spin: Vector3::zeros(),
     }
 }
 

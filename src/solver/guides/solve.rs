@@ -7,6 +7,7 @@ use nalgebra::{Point3, Vector3};
 use super::GuideSolver;
 use crate::model::HairModel;
 use crate::motion::Pose;
+use crate::solver::tunable::Tuning;
 use crate::solver::{Aggregate, Solver, SolverKind, StepReport};
 use crate::style::SimParams;
 
@@ -41,6 +42,20 @@ impl Solver for GuideSolver {
 
     fn set_params(&mut self, params: &SimParams) {
         self.params = params.clone();
+    }
+
+    fn tuning(&self) -> Tuning {
+        Tuning {
+            sim: self.params.clone(),
+            guides: self.gp.clone(),
+            ..Tuning::default()
+        }
+    }
+
+    /// Every tunable of the `guides:` section is read afresh at each sub-step.
+    fn set_tuning(&mut self, t: &Tuning) {
+        self.gp = t.guides.clone();
+        self.set_params(&t.sim);
     }
 
     fn ignored_params(&self) -> &'static [&'static str] {

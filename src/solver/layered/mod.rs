@@ -19,6 +19,7 @@ pub mod forces;
 pub mod params;
 pub mod response;
 pub mod strands;
+pub mod tunables;
 pub mod wisp;
 
 use std::sync::Arc;
@@ -30,6 +31,7 @@ pub use params::LayeredParams;
 use crate::frame::{Frame, PrimitiveKind};
 use crate::model::HairModel;
 use crate::motion::{Motion, Pose};
+use crate::solver::tunable::Tuning;
 use crate::solver::{Aggregate, Solver, SolverKind, StepReport};
 use crate::style::{SimParams, Style};
 
@@ -250,6 +252,21 @@ impl Solver for LayeredSolver {
         self.params = params.clone();
         self.coeffs = coeffs(params, &self.layered, self.coeffs.stiffness);
         self.shares.update(&self.wisps, &self.coeffs, self.dt);
+    }
+
+    fn tuning(&self) -> Tuning {
+        Tuning {
+            sim: self.params.clone(),
+            layered: self.layered.clone(),
+            ..Tuning::default()
+        }
+    }
+
+    /// The `layered:` values are read at every step (viscosity, angle, body friction) or folded
+    /// into the spring coefficients here (damping, bending).
+    fn set_tuning(&mut self, t: &Tuning) {
+        self.layered = t.layered.clone();
+        self.set_params(&t.sim);
     }
 
     fn ignored_params(&self) -> &'static [&'static str] {
