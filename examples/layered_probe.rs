@@ -27,7 +27,7 @@ fn main() -> anyhow::Result<()> {
         s.step(&mut r);
         pairs += r.counters.pairs_tested as u64;
         for st in &r.stats {
-            match st.name() {
+            match st.name {
                 "interpenetrating_pairs" => inter += st.value,
                 "collisions" => coll += st.value,
                 "body_contacts" => body += st.value,

@@ -3,9 +3,8 @@
 //! SCA 2003), streamed live to the Rerun viewer or to a `.rrd` recording, beside the models the
 //! AWT grew from.
 //!
-//! The modules, in layer order: a module uses only the modules below it, except that `style`
-//! still names the solvers' parameter sections (issue 26 §1). `tests/layout.rs` keeps this map
-//! in step with the tree and checks the order against every `use`.
+//! The modules, in layer order: a module uses only the modules below it. `tests/layout.rs`
+//! keeps this map in step with the tree and checks the order against every `use`.
 //!
 //! ```text
 //! cli         arguments → option structs, exit codes
@@ -17,7 +16,7 @@
 //! render      the CPU hair renderer: camera, shadow maps, shading, rasteriser, resolve
 //! pipeline    stepping a frame, filling a Frame from a solver
 //! scene       the one loader: style + motion + model choice → solver
-//! solver      the Solver trait and the solvers: awt/ (single-level is its mode), layered/, guides/
+//! solver      the Solver trait, the tables of tunables, the solvers: awt/ (single-level is its mode), layered/, guides/
 //! frame       the Frame snapshot: primitives, strands, body, events, stats
 //! report      what a step reports: events, counters, stats, stage timers
 //! error       user errors and exit codes

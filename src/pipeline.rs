@@ -190,7 +190,10 @@ pub fn step_frame(solver: &mut dyn Solver, report: &mut StepReport, frame: &mut 
 fn aggregate_stats(into: &mut Vec<crate::report::Stat>, step: &[crate::report::Stat], first: bool) {
     use crate::report::Aggregate;
     for s in step {
-        match into.iter_mut().find(|t| t.path == s.path) {
+        match into
+            .iter_mut()
+            .find(|t| t.name == s.name && t.group == s.group)
+        {
             Some(t) if !first => {
                 t.value = match s.aggregate {
                     Aggregate::Last => s.value,
@@ -212,47 +215,45 @@ pub fn fill_stats(
     tunables: &[crate::solver::tunable::Tunable],
     tuning: &crate::solver::tunable::Tuning,
 ) {
-    use crate::report::paths as p;
-    use crate::report::{Aggregate, Stat};
+    use crate::report::names as n;
+    use crate::report::{Aggregate, Stat, StatGroup};
     let c = &frame.counters;
     let st = &mut frame.stats;
     st.clear();
-    let mut push = |path: &'static str, value: f64| {
-        st.push(Stat {
-            path,
-            value,
-            aggregate: Aggregate::Last,
-        })
-    };
-    for l in 0..(frame.levels as usize).min(p::ACTIVE_LEVEL_PATHS.len()) {
+    let mut push =
+        |name: &'static str, value: f64| st.push(Stat::new(name, value, Aggregate::Last));
+    for l in 0..(frame.levels as usize).min(n::ACTIVE_LEVELS.len()) {
         let v = c.active_per_level.get(l).copied().unwrap_or(0);
-        push(p::ACTIVE_LEVEL_PATHS[l], v as f64);
+        push(n::ACTIVE_LEVELS[l], v as f64);
     }
-    push(p::SPLITS, frame.splits as f64);
-    push(p::MERGES, frame.merges as f64);
-    push(p::PAIRS_TESTED, c.pairs_tested as f64);
-    push(p::PAIRS_IN_CONTACT, c.pairs_in_contact as f64);
-    push(p::BODY_CONTACTS, c.body_contacts as f64);
-    push(p::KINETIC_ENERGY, c.kinetic_energy);
+    push(n::SPLITS, frame.splits as f64);
+    push(n::MERGES, frame.merges as f64);
+    push(n::PAIRS_TESTED, c.pairs_tested as f64);
+    push(n::PAIRS_IN_CONTACT, c.pairs_in_contact as f64);
+    push(n::BODY_CONTACTS, c.body_contacts as f64);
+    push(n::KINETIC_ENERGY, c.kinetic_energy);
     for s in &frame.solver_stats {
         // A solver stat of a common name replaces the common value.
-        match st.iter_mut().find(|t| t.path == s.path) {
+        match st
+            .iter_mut()
+            .find(|t| t.name == s.name && t.group == s.group)
+        {
             Some(t) => t.value = s.value,
             None => st.push(*s),
         }
     }
-    let mut push = |path: &'static str, value: f64| {
-        st.push(Stat {
-            path,
-            value,
-            aggregate: Aggregate::Last,
-        })
-    };
-    push(p::STEP_MS, frame.step_ms);
-    push(p::DROPPED_FRAMES, frame.dropped_frames as f64);
-    push(p::REALTIME_FACTOR, frame.realtime_factor);
+    let mut push =
+        |name: &'static str, value: f64| st.push(Stat::new(name, value, Aggregate::Last));
+    push(n::STEP_MS, frame.step_ms);
+    push(n::DROPPED_FRAMES, frame.dropped_frames as f64);
+    push(n::REALTIME_FACTOR, frame.realtime_factor);
     for t in tunables {
-        push(t.path, t.value(tuning));
+        st.push(Stat {
+            name: t.name,
+            group: StatGroup::Params,
+            value: t.value(tuning),
+            aggregate: Aggregate::Last,
+        });
     }
 }
 

@@ -12,7 +12,6 @@ use std::process::Command;
 
 use wisptree::app::{self as run, RunOptions, StopSignal};
 use wisptree::frame::Frame;
-use wisptree::report::paths::REALTIME_FACTOR;
 use wisptree::scene::Scene;
 use wisptree::solver::SolverKind;
 use wisptree::stream::sink::SinkChoice;
@@ -37,7 +36,7 @@ fn a_recording_logs_the_realtime_factor_of_every_frame() {
         StopSignal::new(),
     )
     .expect("the run succeeds");
-    let series = rrd::scalars(&rrd::decode_file(&out), REALTIME_FACTOR);
+    let series = rrd::scalars(&rrd::decode_file(&out), "/stats/realtime_factor");
     assert_eq!(
         series.iter().map(|s| s.0).collect::<Vec<_>>(),
         (0..25).collect::<Vec<_>>(),

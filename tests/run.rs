@@ -110,11 +110,11 @@ fn a_short_recording_holds_every_path_one_row_per_frame_and_the_events_of_each_f
         paths::SCALP,
         paths::SPLITS,
         paths::LOG,
-        paths::STAT_SPLITS,
-        paths::STAT_MERGES,
-        paths::KINETIC_ENERGY,
-        paths::STEP_MS,
-        paths::DROPPED_FRAMES,
+        "/stats/splits",
+        "/stats/merges",
+        "/stats/kinetic_energy",
+        "/stats/step_ms",
+        "/stats/dropped_frames",
         "/params/split_threshold",
         "/params/merge_velocity",
         &paths::active_nodes_level(0),
@@ -173,7 +173,7 @@ fn a_short_recording_holds_every_path_one_row_per_frame_and_the_events_of_each_f
     assert_eq!(rows(&chunks, paths::MERGES, text), expected_merges);
     assert_eq!(summary.splits as usize, expected_splits.len());
     // And the per-frame split counts agree with the /stats series.
-    let stat: Vec<(i64, f64)> = scalars(&chunks, paths::STAT_SPLITS);
+    let stat: Vec<(i64, f64)> = scalars(&chunks, "/stats/splits");
     for (f, n) in stat {
         let want = expected_splits.iter().filter(|e| e.0 == f).count();
         assert_eq!(n as usize, want, "frame {f}");

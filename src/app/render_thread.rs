@@ -30,7 +30,7 @@ pub const JPEG_QUALITY: u8 = 85;
 /// The default image size, pixels.
 pub const DEFAULT_RENDER_SIZE: (u32, u32) = (640, 480);
 /// The stat that counts frames passed on without an image.
-pub const RENDER_SKIPPED: &str = "/stats/render_skipped";
+pub const RENDER_SKIPPED: &str = "render_skipped";
 
 /// The camera every view of `scene` starts from: the style's `render:` overrides, else one
 /// framing the box the hair sweeps in the motion's first seconds.
@@ -151,11 +151,9 @@ impl RenderThread {
                 self.renderer.render(&input, &self.camera, &mut img);
                 image = Some(img);
             }
-            frame.stats.push(Stat {
-                path: RENDER_SKIPPED,
-                value: skipped as f64,
-                aggregate: Aggregate::Last,
-            });
+            frame
+                .stats
+                .push(Stat::new(RENDER_SKIPPED, skipped as f64, Aggregate::Last));
             let sent = if encoder.is_some() {
                 to_encoder.send(Job { frame, image }).is_ok()
             } else {

@@ -65,11 +65,11 @@ impl RunLog {
             .frame_done(solver.dt() * solver.steps_per_frame() as f64);
         pipeline::fill_stats(f, solver.tunables(), &solver.tuning());
         let total: u32 = f.counters.active_per_level.iter().sum();
-        f.stats.push(Stat {
-            path: RUN_ACTIVE_TOTAL,
-            value: f64::from(total),
-            aggregate: Aggregate::Last,
-        });
+        f.stats.push(Stat::new(
+            RUN_ACTIVE_TOTAL,
+            f64::from(total),
+            Aggregate::Last,
+        ));
         self.logger.log_frame(f)?;
         if self.index == 0 {
             crate::stream::label_run_series(&self.rec, self.slot, &self.label)?;

@@ -119,7 +119,7 @@ pub fn time_steps(solver: &mut dyn Solver, steps: usize, mut after_step: impl Fn
         contact += u64::from(c.pairs_in_contact);
         body += u64::from(c.body_contacts);
         for st in &report.stats {
-            let e = own.entry(st.name().to_owned()).or_insert((0.0, f64::MIN));
+            let e = own.entry(st.name.to_owned()).or_insert((0.0, f64::MIN));
             e.0 += st.value;
             e.1 = e.1.max(st.value);
         }

@@ -247,8 +247,11 @@ impl Frame {
         }
     }
 
-    /// The value of stat `path` this frame, if present.
-    pub fn stat(&self, path: &str) -> Option<f64> {
-        self.stats.iter().find(|s| s.path == path).map(|s| s.value)
+    /// The value of the measure `name` this frame (`/stats/<name>` in a recording), if present.
+    pub fn stat(&self, name: &str) -> Option<f64> {
+        self.stats
+            .iter()
+            .find(|s| s.group == crate::report::StatGroup::Stats && s.name == name)
+            .map(|s| s.value)
     }
 }

@@ -5,43 +5,42 @@ use std::time::Duration;
 
 pub mod tempo;
 
-/// Entity paths of the stats every solver reports (see README, "Entity paths"); a solver's own
-/// stats are named where it sets them.
-pub mod paths {
-    /// The per-level active node counts live below this.
-    pub const ACTIVE_LEVEL_PREFIX: &str = "/stats/active_nodes/";
-    /// Entity paths of the per-level active node counts, `/stats/active_nodes/level_N` (a model
-    /// has at most this many levels: the style validation refuses more).
-    pub const ACTIVE_LEVEL_PATHS: [&str; 8] = [
-        "/stats/active_nodes/level_0",
-        "/stats/active_nodes/level_1",
-        "/stats/active_nodes/level_2",
-        "/stats/active_nodes/level_3",
-        "/stats/active_nodes/level_4",
-        "/stats/active_nodes/level_5",
-        "/stats/active_nodes/level_6",
-        "/stats/active_nodes/level_7",
+/// Names of the stats every solver reports (see README, "Entity paths": `stream` logs a stat
+/// at `/stats/<name>`); a solver's own stats are named where it sets them.
+pub mod names {
+    /// The per-level active node counts are named below this.
+    pub const ACTIVE_LEVEL_PREFIX: &str = "active_nodes/";
+    /// Names of the per-level active node counts, `active_nodes/level_N` (a model has at most
+    /// this many levels: the style validation refuses more).
+    pub const ACTIVE_LEVELS: [&str; 8] = [
+        "active_nodes/level_0",
+        "active_nodes/level_1",
+        "active_nodes/level_2",
+        "active_nodes/level_3",
+        "active_nodes/level_4",
+        "active_nodes/level_5",
+        "active_nodes/level_6",
+        "active_nodes/level_7",
     ];
-
     /// Splits in the frame (AWT §3.1).
-    pub const SPLITS: &str = "/stats/splits";
+    pub const SPLITS: &str = "splits";
     /// Merges in the frame (AWT §3.2).
-    pub const MERGES: &str = "/stats/merges";
+    pub const MERGES: &str = "merges";
     /// Segment pairs that reached the exact test, summed over the frame's steps.
-    pub const PAIRS_TESTED: &str = "/stats/pairs_tested";
+    pub const PAIRS_TESTED: &str = "pairs_tested";
     /// Tested pairs found in contact, summed over the frame's steps.
-    pub const PAIRS_IN_CONTACT: &str = "/stats/pairs_in_contact";
+    pub const PAIRS_IN_CONTACT: &str = "pairs_in_contact";
     /// Body contacts, summed over the frame's steps.
-    pub const BODY_CONTACTS: &str = "/stats/body_contacts";
+    pub const BODY_CONTACTS: &str = "body_contacts";
     /// Kinetic energy at the end of the frame, J.
-    pub const KINETIC_ENERGY: &str = "/stats/kinetic_energy";
+    pub const KINETIC_ENERGY: &str = "kinetic_energy";
     /// Wall-clock time per step, ms.
-    pub const STEP_MS: &str = "/stats/step_ms";
+    pub const STEP_MS: &str = "step_ms";
     /// Frames dropped so far because the logger fell behind (live only).
-    pub const DROPPED_FRAMES: &str = "/stats/dropped_frames";
+    pub const DROPPED_FRAMES: &str = "dropped_frames";
     /// Simulated seconds per wall second over the last second of frames: 1 is live, under 1
     /// slow motion (in a recording: how fast the run went). See [`super::tempo`].
-    pub const REALTIME_FACTOR: &str = "/stats/realtime_factor";
+    pub const REALTIME_FACTOR: &str = "realtime_factor";
 }
 
 /// Which adaptation happened.
@@ -88,22 +87,39 @@ pub enum Aggregate {
     Max,
 }
 
-/// One named number of a step or a frame: logged as a scalar at `path` (`/stats/<name>`),
-/// printed and written to JSON by the bench under its last path segment.
+/// What a stat is: a count or measure of the run, or a tunable parameter in force. `stream`
+/// logs the first at `/stats/<name>` and the second at `/params/<name>`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum StatGroup {
+    /// A count or measure (`/stats/<name>`).
+    Stats,
+    /// A tunable in force, by its table name (`/params/<name>`).
+    Params,
+}
+
+/// One named number of a step or a frame: logged as a scalar by `stream` (at `/stats/<name>`
+/// or `/params/<name>`), printed and written to JSON by the bench under its name.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Stat {
-    /// The entity path, `/stats/<name>` (an interface: documented in README).
-    pub path: &'static str,
-    /// The value (unit in the path's documentation).
+    /// The name (`links_intact`; an interface: documented in README).
+    pub name: &'static str,
+    /// A measure or a tunable in force.
+    pub group: StatGroup,
+    /// The value (unit in the name's documentation).
     pub value: f64,
     /// How the frame's value is made from its steps'.
     pub aggregate: Aggregate,
 }
 
 impl Stat {
-    /// The last path segment (`interpenetrating_pairs` for `/stats/interpenetrating_pairs`).
-    pub fn name(&self) -> &'static str {
-        self.path.rsplit('/').next().unwrap_or(self.path)
+    /// A measure `name` (group [`StatGroup::Stats`]).
+    pub fn new(name: &'static str, value: f64, aggregate: Aggregate) -> Stat {
+        Stat {
+            name,
+            group: StatGroup::Stats,
+            value,
+            aggregate,
+        }
     }
 }
 
@@ -245,18 +261,14 @@ pub struct StepReport {
 }
 
 impl StepReport {
-    /// Sets stat `path` of this step (added if absent; no allocation once it exists).
-    pub fn set_stat(&mut self, path: &'static str, value: f64, aggregate: Aggregate) {
-        match self.stats.iter_mut().find(|s| s.path == path) {
+    /// Sets stat `name` of this step (added if absent; no allocation once it exists).
+    pub fn set_stat(&mut self, name: &'static str, value: f64, aggregate: Aggregate) {
+        match self.stats.iter_mut().find(|s| s.name == name) {
             Some(s) => {
                 s.value = value;
                 s.aggregate = aggregate;
             }
-            None => self.stats.push(Stat {
-                path,
-                value,
-                aggregate,
-            }),
+            None => self.stats.push(Stat::new(name, value, aggregate)),
         }
     }
 }

@@ -121,6 +121,42 @@ impl SolverKind {
     }
 }
 
+/// The settling of every solver (AWT §2.3: the animation starts from hair "often at rest"): the
+/// hair hangs under gravity in the starting pose for `seconds`, `round(seconds / dt)` calls of
+/// `step` with one report reused. Returns the steps taken; the caller marks itself settling
+/// around it and starts from rest after it.
+pub fn settle_steps(seconds: f64, dt: f64, mut step: impl FnMut(&mut StepReport)) -> usize {
+    let steps = (seconds / dt).round() as usize;
+    let mut report = StepReport::default();
+    for _ in 0..steps {
+        step(&mut report);
+    }
+    steps
+}
+
+/// The [`Solver`] getters that are the same for every solver struct holding its `model`,
+/// simulated `time`, `pose` and `params` as fields of those names.
+macro_rules! state_getters {
+    () => {
+        fn model(&self) -> &std::sync::Arc<crate::model::HairModel> {
+            &self.model
+        }
+
+        fn time(&self) -> f64 {
+            self.time
+        }
+
+        fn pose(&self) -> &crate::motion::Pose {
+            &self.pose
+        }
+
+        fn params(&self) -> &crate::style::SimParams {
+            &self.params
+        }
+    };
+}
+pub(crate) use state_getters;
+
 /// Checks the style's sections of the layered and guide models by their solvers' rules; the
 /// dotted field path and the reason. Every loader above the solvers calls it (`scene`), so a
 /// bad value stops a command before it runs, whichever model it picks.

@@ -48,11 +48,9 @@ pub type Below = fn(&Tuning) -> (f64, &'static str);
 /// One tunable parameter of a solver.
 #[derive(Clone, Copy)]
 pub struct Tunable {
-    /// The name in requests, in `sweep --set`, in the bench's JSON and in `/params/<name>`:
-    /// the style field's own name where there is one (`split_threshold`).
+    /// The name in requests, in `sweep --set`, in the bench's JSON and in the recording
+    /// (`/params/<name>`): the style field's own name where there is one (`split_threshold`).
     pub name: &'static str,
-    /// The entity path of its plot, `/params/<name>`.
-    pub path: &'static str,
     /// What the page shows beside the slider.
     pub label: &'static str,
     /// The unit shown after the value.
@@ -83,15 +81,14 @@ impl std::fmt::Debug for Tunable {
     }
 }
 
-/// A table entry: `tunable!(name, label, unit, min..=max, log, doc, |t| get, |t, v| set)`;
-/// `path` is made from the name, so that it is spelled once.
+/// A table entry: `tunable!(name, label, unit, min..=max, log, doc, get: |t| …, set: |t, v| …)`,
+/// with an optional `below: |t| (limit, why)`.
 #[macro_export]
 macro_rules! tunable {
     ($name:literal, $label:expr, $unit:expr, $min:literal ..= $max:literal, $log:expr, $doc:expr,
      get: $get:expr, set: $set:expr $(, below: $below:expr)? $(,)?) => {
         $crate::solver::tunable::Tunable {
             name: $name,
-            path: concat!("/params/", $name),
             label: $label,
             unit: $unit,
             min: $min,
@@ -311,7 +308,6 @@ mod tests {
     fn an_entry_reads_writes_and_checks_its_value() {
         let mut t = Tuning::default();
         let e = find(TABLE, "merge_velocity").unwrap();
-        assert_eq!(e.path, "/params/merge_velocity");
         assert_eq!(e.apply(&mut t, 0.25), Ok(0.1));
         assert_eq!(t.sim.merge_velocity, 0.25);
         assert!(e

@@ -67,7 +67,7 @@ fn energy_contents() -> Vec<String> {
     let mut out = vec!["+ /stats/kinetic_energy".to_owned()];
     for kind in crate::solver::SolverKind::ALL {
         for t in kind.tunables() {
-            let line = format!("+ {}", t.path);
+            let line = format!("+ {}", super::paths::param(t.name));
             if t.max <= SMALL_PARAM && !out.contains(&line) {
                 out.push(line);
             }

@@ -63,9 +63,9 @@ pub(super) const STRAND_RADIUS_UI: f32 = 1.0;
 /// Event markers: big enough to find in a frame.
 pub(super) const EVENT_RADIUS_UI: f32 = 6.0;
 
-/// Series names and colours of the stats every solver has.
+/// Series names and colours of the stats every solver has, by stat name.
 pub const COMMON_SERIES: [(&str, (u8, u8, u8), &str); 9] = {
-    use crate::report::paths as p;
+    use crate::report::names as p;
     [
         (p::SPLITS, SPLIT_COLOR, "splits"),
         (p::MERGES, MERGE_COLOR, "merges"),
@@ -79,10 +79,10 @@ pub const COMMON_SERIES: [(&str, (u8, u8, u8), &str); 9] = {
     ]
 };
 
-/// Whether `path` is a stat with a fixed series style (common or per level).
-pub fn is_common_stat(path: &str) -> bool {
-    path.starts_with(crate::report::paths::ACTIVE_LEVEL_PREFIX)
-        || COMMON_SERIES.iter().any(|(p, _, _)| *p == path)
+/// Whether `name` is a measure with a fixed series style (common or per level).
+pub fn is_common_stat(name: &str) -> bool {
+    name.starts_with(crate::report::names::ACTIVE_LEVEL_PREFIX)
+        || COMMON_SERIES.iter().any(|(p, _, _)| *p == name)
 }
 
 /// Colours for solver-specific stats, by order of appearance.

@@ -46,7 +46,7 @@ use rerun::{
 };
 
 use crate::frame::{Frame, PrimitiveKind};
-use crate::report::{AdaptEvent, EventKind};
+use crate::report::{AdaptEvent, EventKind, StatGroup};
 
 /// Severity of a free-text message on `/log`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -86,8 +86,10 @@ struct Paths {
     /// `/events/<kind>`, in [`EventKind::ALL`] order.
     events: [EntityPath; 4],
     log: EntityPath,
-    /// Stats and extra primitive sets by their path (filled on first sight; a few dozen).
+    /// Extra primitive sets by their path (filled on first sight; a few).
     by_name: Vec<(&'static str, EntityPath)>,
+    /// Stats by group and name (filled on first sight; a few dozen).
+    stats: Vec<((StatGroup, &'static str), EntityPath)>,
 }
 
 impl Paths {
@@ -104,7 +106,22 @@ impl Paths {
             events: EventKind::ALL.map(|k| p(&paths::events(k))),
             log: p(paths::LOG),
             by_name: Vec::new(),
+            stats: Vec::new(),
         }
+    }
+
+    /// The entity path of a stat (`/stats/<name>`, `/params/<name>`; allocates only the first
+    /// time).
+    fn stat(&mut self, group: StatGroup, name: &'static str) -> &EntityPath {
+        let i = match self.stats.iter().position(|(k, _)| *k == (group, name)) {
+            Some(i) => i,
+            None => {
+                let path = format!("{}{}", self.prefix, paths::stat_path(group, name));
+                self.stats.push(((group, name), path.into()));
+                self.stats.len() - 1
+            }
+        };
+        &self.stats[i].1
     }
 
     /// The entity path of a stat or primitive set (allocates only the first time).
@@ -171,7 +188,7 @@ pub struct Logger {
     node_colors: Vec<Color>,
     seg_colors: Vec<Color>,
     /// Series styles already logged for solver-specific stats.
-    styled: Vec<&'static str>,
+    styled: Vec<(StatGroup, &'static str)>,
 }
 
 impl Logger {
@@ -413,17 +430,19 @@ impl Logger {
     /// series style (name, colour) the first time it is seen.
     fn log_stats(&mut self, frame: &Frame) -> anyhow::Result<()> {
         for st in &frame.stats {
-            if !colors::is_common_stat(st.path) && !self.styled.contains(&st.path) {
-                self.styled.push(st.path);
+            let common = st.group == StatGroup::Stats && colors::is_common_stat(st.name);
+            let key = (st.group, st.name);
+            if !common && !self.styled.contains(&key) {
+                self.styled.push(key);
                 let (r, g, b) = colors::stat_color(self.styled.len());
                 self.rec.log_static(
-                    self.paths.named(st.path).clone(),
+                    self.paths.stat(st.group, st.name).clone(),
                     &SeriesLines::new()
                         .with_colors([Color::from_rgb(r, g, b)])
-                        .with_names([series_name(st.path, st.name())]),
+                        .with_names([series_name(st.group, st.name)]),
                 )?;
             }
-            let path = self.paths.named(st.path).clone();
+            let path = self.paths.stat(st.group, st.name).clone();
             self.rec.log(path, &Scalars::single(st.value))?;
         }
         Ok(())
@@ -513,9 +532,9 @@ fn log_series_styles(rec: &RecordingStream, prefix: &str, levels: u16) -> anyhow
                 .with_names([format!("level {l}")]),
         )?;
     }
-    for (path, (r, g, b), name) in colors::COMMON_SERIES {
+    for (stat, (r, g, b), name) in colors::COMMON_SERIES {
         rec.log_static(
-            format!("{prefix}{path}"),
+            format!("{prefix}{}", paths::stat(stat)),
             &SeriesLines::new()
                 .with_colors([Color::from_rgb(r, g, b)])
                 .with_names([name]),
@@ -526,13 +545,15 @@ fn log_series_styles(rec: &RecordingStream, prefix: &str, levels: u16) -> anyhow
 
 /// The plot's name of a stat: a tunable (`/params/<name>`) by its table's label and unit, any
 /// other stat by its name.
-fn series_name(path: &str, name: &str) -> String {
-    crate::solver::SolverKind::ALL
+fn series_name(group: StatGroup, name: &str) -> String {
+    let tunable = crate::solver::SolverKind::ALL
         .iter()
         .flat_map(|k| k.tunables())
-        .find(|t| t.path == path)
-        .map(|t| format!("{} ({})", t.label, t.unit))
-        .unwrap_or_else(|| name.replace('_', " "))
+        .find(|t| group == StatGroup::Params && t.name == name);
+    match tunable {
+        Some(t) => format!("{} ({})", t.label, t.unit),
+        None => name.replace('_', " "),
+    }
 }
 
 /// One line per event: what, where in the hierarchy, and the value that triggered it.

@@ -1,10 +1,27 @@
 //! Entity paths and timelines: the recording's interface (see the module docs of `stream`).
-//! The stat paths are defined once, in [`crate::report::paths`]; the solvers set them.
+//! The solvers and the pipeline name their stats ([`crate::report::names`], a solver's own where
+//! it sets them); the paths are made here: `/stats/<name>`, and `/params/<name>` for the
+//! tunables in force.
 
-pub use crate::report::paths::{
-    BODY_CONTACTS, DROPPED_FRAMES, KINETIC_ENERGY, MERGES as STAT_MERGES, PAIRS_IN_CONTACT,
-    PAIRS_TESTED, SPLITS as STAT_SPLITS, STEP_MS,
-};
+use crate::report::StatGroup;
+
+/// The entity path of a measure named `name`: `/stats/<name>`.
+pub fn stat(name: &str) -> String {
+    format!("/stats/{name}")
+}
+
+/// The entity path of a tunable in force: `/params/<name>`.
+pub fn param(name: &str) -> String {
+    format!("/params/{name}")
+}
+
+/// The entity path of a stat of `group`.
+pub fn stat_path(group: StatGroup, name: &str) -> String {
+    match group {
+        StatGroup::Stats => stat(name),
+        StatGroup::Params => param(name),
+    }
+}
 
 /// The AWT's active nodes (a solver's nodes are at [`nodes`]).
 pub const NODES: &str = "/hair/awt/nodes";

@@ -31,7 +31,7 @@ pub struct RunView {
 
 /// Total active nodes of a run (the sum over levels), the stat the multi-run layout overlays:
 /// the per-level curves of several runs would be a dozen lines of the same few colours.
-pub const RUN_ACTIVE_TOTAL: &str = "/stats/active_total";
+pub const RUN_ACTIVE_TOTAL: &str = "active_total";
 
 /// A run's eye is moved this much closer to its target than the camera it is given: cameras
 /// frame the hair for the renderer's 30° vertical field of view, the viewer's 3D view has
@@ -100,10 +100,13 @@ pub fn runs_blueprint(
         bp.log(path.as_str(), &c).map(|()| path)
     };
     let grid = container(0, ContainerKind::Grid, &cells, &[])?;
-    let step_ms = crate::report::paths::STEP_MS;
+    let (active, step_ms) = (
+        super::paths::stat(RUN_ACTIVE_TOTAL),
+        super::paths::stat(crate::report::names::STEP_MS),
+    );
     let plots = [
-        log_overlay(&bp, 0, "active nodes, every run", runs, RUN_ACTIVE_TOTAL)?,
-        log_overlay(&bp, 1, "ms per step, every run", runs, step_ms)?,
+        log_overlay(&bp, 0, "active nodes, every run", runs, &active)?,
+        log_overlay(&bp, 1, "ms per step, every run", runs, &step_ms)?,
     ];
     let plots = container(1, ContainerKind::Horizontal, &plots, &[1.0, 1.0])?;
     container(2, ContainerKind::Vertical, &[grid, plots], &[3.0, 1.0])?;
@@ -219,9 +222,9 @@ pub fn send_runs_blueprint(
 /// frame: the logger styles a stat it sees for the first time, and the latest static wins.
 pub fn label_run_series(rec: &super::sink::Recording, k: usize, label: &str) -> anyhow::Result<()> {
     let (r, g, b) = super::colors::stat_color(k + 1);
-    for stat in [RUN_ACTIVE_TOTAL, crate::report::paths::STEP_MS] {
+    for name in [RUN_ACTIVE_TOTAL, crate::report::names::STEP_MS] {
         rec.stream().log_static(
-            format!("/runs/{label}{stat}"),
+            format!("/runs/{label}{}", super::paths::stat(name)),
             &rerun::SeriesLines::new()
                 .with_colors([rerun::Color::from_rgb(r, g, b)])
                 .with_names([label]),

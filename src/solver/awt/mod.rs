@@ -203,16 +203,13 @@ impl Simulation {
     /// Lets the hair hang in the starting pose for `params.settle` seconds, then starts the
     /// clock at 0 with everything at rest.
     fn settle(&mut self) {
-        let steps = (self.params.settle / self.params.dt).round() as usize;
+        self.settling = true;
+        let (seconds, dt) = (self.params.settle, self.params.dt);
+        let steps = crate::solver::settle_steps(seconds, dt, |r| self.step(r));
+        self.settling = false;
         if steps == 0 {
             return;
         }
-        self.settling = true;
-        let mut report = StepReport::default();
-        for _ in 0..steps {
-            self.step(&mut report);
-        }
-        self.settling = false;
         self.time = 0.0;
         self.steps = 0;
         let s = &mut self.slots;

@@ -336,12 +336,9 @@ impl GuideSolver {
     /// Lets the hair hang in the starting pose, then builds the static links on the settled
     /// shape and starts at rest.
     fn settle(&mut self) {
-        let steps = (self.params.settle / self.params.dt).round() as usize;
         self.settling = true;
-        let mut report = self.new_report();
-        for _ in 0..steps {
-            self.step(&mut report);
-        }
+        let (seconds, dt) = (self.params.settle, self.params.dt);
+        crate::solver::settle_steps(seconds, dt, |r| self.step(r));
         self.settling = false;
         self.time = 0.0;
         self.pose = self.motion.pose(0.0);

@@ -1,12 +1,8 @@
 //! [`GuideSolver`] behind the [`Solver`] trait: stepping, stats, display and dense strands.
 
-use std::sync::Arc;
-
 use nalgebra::{Point3, Vector3};
 
 use super::GuideSolver;
-use crate::model::HairModel;
-use crate::motion::Pose;
 use crate::solver::tunable::Tuning;
 use crate::solver::{Aggregate, Solver, SolverKind, StepReport};
 use crate::style::SimParams;
@@ -16,13 +12,7 @@ impl Solver for GuideSolver {
         SolverKind::Guides
     }
 
-    fn model(&self) -> &Arc<HairModel> {
-        &self.model
-    }
-
-    fn time(&self) -> f64 {
-        self.time
-    }
+    crate::solver::state_getters!();
 
     fn dt(&self) -> f64 {
         self.params.dt
@@ -30,14 +20,6 @@ impl Solver for GuideSolver {
 
     fn steps_per_frame(&self) -> usize {
         self.params.steps_per_frame.max(1) as usize
-    }
-
-    fn pose(&self) -> &Pose {
-        &self.pose
-    }
-
-    fn params(&self) -> &SimParams {
-        &self.params
     }
 
     fn set_params(&mut self, params: &SimParams) {
@@ -121,17 +103,17 @@ impl Solver for GuideSolver {
                 0.5 * self.chains.m[l] * self.chains.v[v].norm_squared()
             })
             .sum();
-        report.set_stat("/stats/links_intact", intact as f64, Aggregate::Last);
+        report.set_stat("links_intact", intact as f64, Aggregate::Last);
         report.set_stat(
-            "/stats/links_broken",
+            "links_broken",
             (self.links.len() - intact) as f64,
             Aggregate::Last,
         );
-        report.set_stat("/stats/contacts", contacts as f64, Aggregate::Sum);
-        report.set_stat("/stats/guides", self.alive.len() as f64, Aggregate::Last);
+        report.set_stat("contacts", contacts as f64, Aggregate::Sum);
+        report.set_stat("guides", self.alive.len() as f64, Aggregate::Last);
         // Integration steps of guides whose sub-step was split (fast joints), this step.
         report.set_stat(
-            "/stats/split_steps",
+            "split_steps",
             (self.splits - splits0) as f64,
             Aggregate::Sum,
         );

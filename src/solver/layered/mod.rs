@@ -46,11 +46,11 @@ pub const ENVELOPE_PATH: &str = "/hair/layered/envelope";
 /// Entity path of the cross-sections' outlines.
 pub const SECTIONS_PATH: &str = "/hair/layered/sections";
 /// Stat: segment pairs in contact that interpenetrate (§4.2.1), summed over a frame's steps.
-pub const STAT_INTERPENETRATING: &str = "/stats/interpenetrating_pairs";
+pub const STAT_INTERPENETRATING: &str = "interpenetrating_pairs";
 /// Stat: segment pairs in contact that collide (§4.2.2).
-pub const STAT_COLLISIONS: &str = "/stats/collisions";
+pub const STAT_COLLISIONS: &str = "collisions";
 /// Stat: skeleton and envelope points in sliding contact with the body (§4.3.1).
-pub const STAT_BODY_CONTACTS: &str = "/stats/body_contacts";
+pub const STAT_BODY_CONTACTS: &str = "body_contacts";
 
 /// The `sim:` fields this model does not use.
 const IGNORED: &[&str] = &[
@@ -170,16 +170,13 @@ impl LayeredSolver {
     }
 
     fn settle(&mut self) {
-        let steps = (self.params.settle / self.dt).round() as usize;
+        self.settling = true;
+        let (seconds, dt) = (self.params.settle, self.dt);
+        let steps = crate::solver::settle_steps(seconds, dt, |r| self.step(r));
+        self.settling = false;
         if steps == 0 {
             return;
         }
-        self.settling = true;
-        let mut report = StepReport::default();
-        for _ in 0..steps {
-            self.step(&mut report);
-        }
-        self.settling = false;
         self.time = 0.0;
         self.steps = 0;
         let w = &mut self.wisps;
@@ -224,13 +221,7 @@ impl Solver for LayeredSolver {
         SolverKind::Layered
     }
 
-    fn model(&self) -> &Arc<HairModel> {
-        &self.model
-    }
-
-    fn time(&self) -> f64 {
-        self.time
-    }
+    crate::solver::state_getters!();
 
     fn dt(&self) -> f64 {
         self.dt
@@ -238,14 +229,6 @@ impl Solver for LayeredSolver {
 
     fn steps_per_frame(&self) -> usize {
         self.steps_per_frame
-    }
-
-    fn pose(&self) -> &Pose {
-        &self.pose
-    }
-
-    fn params(&self) -> &SimParams {
-        &self.params
     }
 
     fn set_params(&mut self, params: &SimParams) {
