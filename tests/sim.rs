@@ -5,8 +5,8 @@ mod common;
 
 use common::*;
 use nalgebra::{Point3, Vector3};
-use wisptree::solver::awt::dynamics::damp_relative;
 use wisptree::solver::awt::{Simulation, StepReport, NO_SLOT};
+use wisptree::solver::common::damp_relative;
 
 const K: usize = 10;
 

@@ -416,8 +416,7 @@ impl GuideSolver {
         for &g in &self.alive {
             for v in self.chains.verts(g) {
                 let l = g * n + (v % (n + 1)).saturating_sub(1).min(n - 1);
-                let wind =
-                    crate::solver::awt::dynamics::wind_at(&self.params, &self.chains.x[v], t);
+                let wind = crate::solver::common::wind_at(&self.params, &self.chains.x[v], t);
                 let c = drag * self.chains.m[l];
                 let soft = 1.0 / (1.0 + h * (self.chains.damp[v] + c) / self.chains.m[l]);
                 self.chains.soft[v] = soft;

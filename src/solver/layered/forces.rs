@@ -237,7 +237,7 @@ fn integrate_envelope(w: &mut Wisps, c: &Coeffs, sh: &Shares, p: usize, root: bo
     }
 }
 
-/// `damp_relative` of the AWT's dynamics (§5.2) with its mass shares already computed
+/// `common::damp_relative` (§5.2) with its mass shares already computed
 /// ([`Shares`]): the same arithmetic.
 #[inline]
 fn damp_shared(

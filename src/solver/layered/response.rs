@@ -14,7 +14,7 @@ use nalgebra::Vector3;
 
 use super::detect::{Contact, PairContacts};
 use super::wisp::{Wisps, ENV, MIN_RHO_FRACTION};
-use crate::solver::awt::dynamics::damp_relative;
+use crate::solver::common::damp_relative;
 
 /// Below this |σ_p × σ_s| (sine of the angle between the axes, ≈ 2°) the two axes are taken
 /// as parallel and the plane is the one through the second axis and the separation.
