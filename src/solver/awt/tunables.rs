@@ -31,6 +31,19 @@ const MERGE: Tunable = tunable!(
     set: |t, v| t.sim.merge_velocity = v,
 );
 
+/// Merge radius factor: §3.2, condition (1).
+const MERGE_RADIUS: Tunable = tunable!(
+    "merge_radius_factor",
+    "merge radius factor",
+    "× radius",
+    1.0..=2.0,
+    false,
+    "Sub-nodes merge only within this many times the super-node's radius of their centre of \
+     mass (AWT §3.2, condition 1; 1 is the strict reading): higher merges sooner.",
+    get: |t| t.sim.merge_radius_factor,
+    set: |t, v| t.sim.merge_radius_factor = v,
+);
+
 /// Friction α: §4.2, with α·dt < 1.
 const FRICTION: Tunable = tunable!(
     "friction",
@@ -60,7 +73,7 @@ const REPULSION: Tunable = tunable!(
 );
 
 /// The AWT's table, in the order the page shows it.
-pub const AWT: &[Tunable] = &[SPLIT, MERGE, FRICTION, REPULSION, WIND];
+pub const AWT: &[Tunable] = &[SPLIT, MERGE, MERGE_RADIUS, FRICTION, REPULSION, WIND];
 
 /// Single-level (every finest node active, no adaptation: the §5.2 baseline) has no
 /// thresholds.
