@@ -332,6 +332,46 @@ mod tests {
     }
 
     #[test]
+    fn every_tables_defaults_lie_in_range_and_every_entry_writes_what_it_reads() {
+        for kind in crate::solver::SolverKind::ALL {
+            let table = kind.tunables();
+            let mut names: Vec<&str> = table.iter().map(|t| t.name).collect();
+            names.dedup();
+            assert_eq!(names.len(), table.len(), "{kind}: a name twice");
+            for e in table {
+                let mut t = Tuning::default();
+                let d = e.value(&t);
+                assert!(
+                    (e.min..=e.max).contains(&d),
+                    "{kind} {}: default {d}",
+                    e.name
+                );
+                assert!(
+                    e.min < e.max && (!e.log || e.min > 0.0),
+                    "{kind} {}",
+                    e.name
+                );
+                // Below any bound from the other values (friction's α·dt < 1).
+                let hi = e.below.map_or(e.max, |b| 0.5 * b(&t).0).min(e.max);
+                for v in [e.min, 0.5 * (e.min + hi)] {
+                    e.apply(&mut t, v).unwrap();
+                    assert_eq!(e.value(&t), v, "{kind} {}", e.name);
+                }
+                // Only its own value moved.
+                for other in table.iter().filter(|o| o.name != e.name) {
+                    assert_eq!(
+                        other.value(&t),
+                        other.value(&Tuning::default()),
+                        "{kind}: setting {} moved {}",
+                        e.name,
+                        other.name
+                    );
+                }
+            }
+        }
+    }
+
+    #[test]
     fn assignments_name_what_is_wrong() {
         let (e, v) =
             parse_assignment(TABLE, "merge_velocity=0.01, 0.5", "awt", &Tuning::default()).unwrap();
