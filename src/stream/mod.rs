@@ -439,7 +439,7 @@ impl Logger {
                     self.paths.stat(st.group, st.name).clone(),
                     &SeriesLines::new()
                         .with_colors([Color::from_rgb(r, g, b)])
-                        .with_names([series_name(st.group, st.name)]),
+                        .with_names([series_name(self.paths.solver, st.group, st.name)]),
                 )?;
             }
             let path = self.paths.stat(st.group, st.name).clone();
@@ -543,11 +543,15 @@ fn log_series_styles(rec: &RecordingStream, prefix: &str, levels: u16) -> anyhow
     Ok(())
 }
 
-/// The plot's name of a stat: a tunable (`/params/<name>`) by its table's label and unit, any
-/// other stat by its name.
-fn series_name(group: StatGroup, name: &str) -> String {
-    let tunable = crate::solver::SolverKind::ALL
+/// The plot's name of a stat: a tunable (`/params/<name>`) by the label and unit of the logged
+/// solver's table entry (`solver` is its path segment, `awt`, `layered`, …), any other stat by
+/// its name.
+fn series_name(solver: &str, group: StatGroup, name: &str) -> String {
+    use crate::solver::SolverKind;
+    let tunable = SolverKind::ALL
         .iter()
+        .filter(|k| k.path_segment() == solver)
+        .chain(SolverKind::ALL.iter())
         .flat_map(|k| k.tunables())
         .find(|t| group == StatGroup::Params && t.name == name);
     match tunable {
@@ -584,4 +588,30 @@ fn describe_event(out: &mut String, e: &AdaptEvent) {
         ),
         EventKind::GuideInsert | EventKind::GuideRemove => Ok(()),
     };
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_tunables_plot_is_named_by_the_logged_solvers_own_table() {
+        // `body_friction` is in both the layered and the guide tables, in different units.
+        assert_eq!(
+            series_name("guides", StatGroup::Params, "body_friction"),
+            "body friction (fraction)"
+        );
+        assert_eq!(
+            series_name("layered", StatGroup::Params, "body_friction"),
+            "body friction (s⁻¹)"
+        );
+        assert_eq!(
+            series_name("awt", StatGroup::Params, "split_threshold"),
+            "split threshold (N·m·kg⁻¹)"
+        );
+        assert_eq!(
+            series_name("guides", StatGroup::Stats, "links_intact"),
+            "links intact"
+        );
+    }
 }
