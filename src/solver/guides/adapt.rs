@@ -141,6 +141,27 @@ impl GuideSolver {
             0.0,
         );
         self.set_guide_state(slot, &pts, &vel);
+        // Back in joint space the links keep the rest shape's lengths, not the blend's: the
+        // forward kinematics can put vertices back inside the body (12 mm on Long under `lean`
+        // when the insertion fell on a frame's last step). Correct the chain as it now stands,
+        // as a sub-step does (§3.3), until nothing is pushed.
+        for _ in 0..4 {
+            let vr = self.chains.verts(slot);
+            let mut x = self.chains.x[vr.clone()].to_vec();
+            let mut v = self.chains.v[vr].to_vec();
+            let pushed = super::body::correct(
+                &mut x,
+                &mut v,
+                &lens,
+                &self.spheres,
+                self.gp.body_margin,
+                0.0,
+            );
+            if pushed == 0 {
+                break;
+            }
+            self.set_guide_state(slot, &x, &v);
+        }
         if let Some(p) = self
             .base_pairs
             .iter()
