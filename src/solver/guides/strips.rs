@@ -344,8 +344,8 @@ impl Strips {
             let chunk = m.get_mut().unwrap_or_else(|e| e.into_inner());
             self.seg_pairs.extend_from_slice(&chunk.seg);
         }
-        // Grouped by triangle (a counting sort, stable: each triangle's vertices in the order
-        // found), so a sub-step loads and prepares each triangle once for all its vertices.
+        // Grouped by triangle (a counting sort), so a sub-step loads and prepares each triangle
+        // once for all its vertices.
         self.tri_start.clear();
         self.tri_start.resize(self.tri.len() + 1, 0);
         let mut found = 0;
@@ -373,6 +373,12 @@ impl Strips {
         }
         self.cursor = cursor;
         self.chunks = chunks;
+        // Each triangle's vertices in index order, the order of a vertex-by-vertex search: the
+        // order in which a sub-step adds their forces, whatever the cells made of it.
+        for t in 0..self.tri.len() {
+            self.tri_verts[self.tri_start[t] as usize..self.tri_start[t + 1] as usize]
+                .sort_unstable();
+        }
     }
 
     /// Piece `c` of the segment pairs: the cells whose runs start in its share of the sorted
