@@ -147,8 +147,10 @@ pub struct Strips {
     cursor: Vec<u32>,
     /// Per chain vertex: hair direction ([`tangent`]), refreshed by `detect` and `apply`.
     tangents: Vec<Vector3<f64>>,
-    /// Per link: box grown by half the reach, and unit direction (`detect`).
+    /// Per link: box grown by half the reach, its low corner's cell, and unit direction
+    /// (`detect`).
     seg_box: Vec<(Vector3<f64>, Vector3<f64>)>,
+    seg_cell: Vec<[i64; 3]>,
     seg_dir: Vec<Vector3<f64>>,
     /// Per triangle: box grown by the reach, and hair direction (`detect`).
     tri_box: Vec<(Vector3<f64>, Vector3<f64>)>,
@@ -181,11 +183,19 @@ fn cell_key(c: [i64; 3]) -> u64 {
 }
 
 fn cell_of(p: &Vector3<f64>, h: f64) -> [i64; 3] {
-    [
-        (p.x / h).floor() as i64,
-        (p.y / h).floor() as i64,
-        (p.z / h).floor() as i64,
-    ]
+    [floor(p.x / h), floor(p.y / h), floor(p.z / h)]
+}
+
+/// `t.floor() as i64` (saturating, NaN to 0) without a call into the maths library, which a
+/// baseline x86-64 build makes of `floor`.
+#[inline]
+fn floor(t: f64) -> i64 {
+    let i = t as i64;
+    if (i as f64) > t {
+        i.saturating_sub(1)
+    } else {
+        i
+    }
 }
 
 impl Strips {
@@ -264,6 +274,7 @@ impl Strips {
         self.seg_box
             .resize(links, (Vector3::zeros(), Vector3::zeros()));
         self.seg_dir.resize(links, Vector3::zeros());
+        self.seg_cell.resize(links, [0; 3]);
         self.tri_box
             .resize(self.tri.len(), (Vector3::zeros(), Vector3::zeros()));
         self.tri_dir.resize(self.tri.len(), Vector3::zeros());
@@ -290,6 +301,7 @@ impl Strips {
                 let (p, q) = (chains.x[v], chains.x[v + 1]);
                 let (lo, hi) = (p.inf(&q) - half, p.sup(&q) + half);
                 self.seg_box[l] = (lo, hi);
+                self.seg_cell[l] = cell_of(&lo, h);
                 let t = q - p;
                 self.seg_dir[l] = t / t.norm();
                 push_cells(&mut self.entries, &lo, &hi, l as u32);
@@ -336,7 +348,7 @@ impl Strips {
             let chunk = &mut *guard;
             chunk.seg.clear();
             chunk.vt.clear();
-            this.seg_piece(c, h, n, &mut chunk.seg);
+            this.seg_piece(c, n, &mut chunk.seg);
             this.vt_piece(c, chains, reach, &mut chunk.vt);
         });
         let mut chunks = std::mem::take(&mut self.chunks);
@@ -384,7 +396,7 @@ impl Strips {
     /// Piece `c` of the segment pairs: the cells whose runs start in its share of the sorted
     /// entries. Each pair is tested in the one cell holding the low corner of their boxes'
     /// overlap.
-    fn seg_piece(&self, c: usize, h: f64, n: usize, out: &mut Vec<(u32, u32)>) {
+    fn seg_piece(&self, c: usize, n: usize, out: &mut Vec<(u32, u32)>) {
         let entries = &self.entries;
         let run_start = |i: usize| {
             let mut i = i.min(entries.len());
@@ -407,6 +419,7 @@ impl Strips {
             for p in s..e {
                 let la = entries[p].1 as usize;
                 let (alo, ahi) = self.seg_box[la];
+                let ca = self.seg_cell[la];
                 for &(_, lb) in &entries[p + 1..e] {
                     let lb = lb as usize;
                     let (blo, bhi) = self.seg_box[lb];
@@ -415,7 +428,11 @@ impl Strips {
                     if lo.x > hi.x || lo.y > hi.y || lo.z > hi.z || la / n == lb / n {
                         continue;
                     }
-                    if cell_key(cell_of(&lo, h)) != key
+                    // The cell of the overlap's low corner, `lo = alo.sup(blo)`: the larger
+                    // of the two boxes' low cells on each axis (the cell is monotone).
+                    let cb = self.seg_cell[lb];
+                    let cell = [ca[0].max(cb[0]), ca[1].max(cb[1]), ca[2].max(cb[2])];
+                    if cell_key(cell) != key
                         || orientation_scale(&self.seg_dir[la], &self.seg_dir[lb]) < MIN_CROSSING
                     {
                         continue;
@@ -705,6 +722,7 @@ impl Strips {
             + (self.tri_start.capacity() + self.tri_verts.capacity() + self.cursor.capacity()) * 4
             + self.tangents.capacity() * 24
             + (self.seg_box.capacity() + self.tri_box.capacity()) * 48
+            + self.seg_cell.capacity() * 24
             + (self.seg_dir.capacity() + self.tri_dir.capacity()) * 24
             + self.tri_prism.capacity() * std::mem::size_of::<Prism>()
             + self.tri_guides.capacity() * 8
@@ -994,6 +1012,34 @@ mod tests {
             }
         }
         out
+    }
+
+    #[test]
+    fn floor_is_the_library_floor() {
+        for t in [
+            0.0,
+            -0.0,
+            0.5,
+            -0.5,
+            1.0,
+            -1.0,
+            2.999,
+            -2.999,
+            1e300,
+            -1e300,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::NAN,
+            4.5e15,
+            -4.5e15,
+        ] {
+            assert_eq!(floor(t), t.floor() as i64, "{t}");
+        }
+        let mut rng = Lcg(3);
+        for _ in 0..10_000 {
+            let t = (rng.unit() - 0.5) * 100.0;
+            assert_eq!(floor(t), t.floor() as i64, "{t}");
+        }
     }
 
     #[test]
