@@ -512,6 +512,31 @@ fn deterministic() {
         .all(|(x, y)| x.to_bits() == y.to_bits())));
 }
 
+/// The strips' broad phase and contacts on two threads give the state of one thread, bit for
+/// bit (the work is cut into fixed pieces whose results are joined in order).
+#[test]
+fn same_state_on_one_thread_or_two() {
+    let run = |threads: usize| {
+        let mut s = solver("short", "shake", |g| g.count = 120);
+        s.set_threads(threads);
+        assert_eq!(s.pool_threads(), threads);
+        let mut r = s.new_report();
+        let mut contacts = 0;
+        for _ in 0..30 {
+            s.step(&mut r);
+            contacts += r.counters.pairs_in_contact;
+        }
+        assert!(contacts > 1000, "{contacts} contacts");
+        s.chains
+            .x
+            .iter()
+            .chain(&s.chains.v)
+            .flat_map(|p| p.iter().map(|c| c.to_bits()).collect::<Vec<_>>())
+            .collect::<Vec<u64>>()
+    };
+    assert!(run(1) == run(2));
+}
+
 #[test]
 fn scene_loads_guides_and_draws_links_strips_and_stats() {
     let scene = Scene::load("long", "lean", SolverKind::Guides).unwrap();

@@ -94,6 +94,9 @@ pub struct GuideSolver {
     last_body: usize,
     /// Integration steps taken by guides whose sub-step was split (see [`MAX_TURN`]).
     pub splits: u64,
+    /// The threads of the strips' broad phase and contacts (none: the calling thread only).
+    /// The result does not depend on it.
+    pool: Option<crate::par::Pool>,
 }
 
 /// The head's spatial velocity `(ω; v_O)` at the world origin.
@@ -188,6 +191,7 @@ impl GuideSolver {
             last_contacts: 0,
             last_body: 0,
             splits: 0,
+            pool: None,
             model,
             motion,
             params,
@@ -237,10 +241,30 @@ impl GuideSolver {
             );
             s.mid = vec![NO_GUIDE; s.base_pairs.len()];
         }
+        s.set_pool_threads(crate::solver::awt::default_threads());
         s.rebuild_topology();
         s.fk_all(&s.base_at(0.0, 1e-3).0, 0.0);
         s.settle();
         s
+    }
+
+    /// Threads of the strips' broad phase and contacts (1 or 2; the result is the same bit for
+    /// bit). A pool that cannot be started leaves one thread.
+    pub fn set_pool_threads(&mut self, threads: usize) {
+        let threads = threads.clamp(1, 2);
+        if threads == self.pool_threads() {
+            return;
+        }
+        self.pool = if threads > 1 {
+            crate::par::Pool::new(threads).ok()
+        } else {
+            None
+        };
+    }
+
+    /// Threads of the strips' broad phase and contacts.
+    pub fn pool_threads(&self) -> usize {
+        self.pool.as_ref().map_or(1, |p| p.workers())
     }
 
     /// Sets slot `g` up from its rest polyline.
@@ -432,7 +456,8 @@ impl GuideSolver {
             );
         }
         let contacts = if self.gp.collision {
-            self.strips.apply(&mut self.chains, &self.gp)
+            self.strips
+                .apply_on(self.pool.as_ref(), &mut self.chains, &self.gp)
         } else {
             0
         };

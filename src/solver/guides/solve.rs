@@ -71,8 +71,12 @@ impl Solver for GuideSolver {
         let mut body = 0;
         if self.gp.collision {
             self.strips.update_broken(&self.chains, self.gp.strip_break);
-            self.strips
-                .detect(&self.chains, &self.alive, 2.0 * self.gp.contact_distance);
+            self.strips.detect_on(
+                self.pool.as_ref(),
+                &self.chains,
+                &self.alive,
+                2.0 * self.gp.contact_distance,
+            );
         }
         let splits0 = self.splits;
         for _ in 0..sub {
@@ -178,6 +182,10 @@ impl Solver for GuideSolver {
             }
         }
         Ok(())
+    }
+
+    fn set_threads(&mut self, threads: usize) {
+        self.set_pool_threads(threads);
     }
 
     fn reserved_bytes(&self) -> usize {
