@@ -3,7 +3,7 @@
 //! at once), which finds the same contacts with the same forces as [`contact`], bit for bit; the
 //! few pairs outside its general case are handed back and done by [`contact`] itself.
 
-use crate::simd::pairs::{self, PairBatch, PairOut, PairParams, BATCH};
+use crate::simd::pairs::{self, PairBatch, PairOut, PairParams, Segment, BATCH};
 
 use super::*;
 
@@ -17,6 +17,9 @@ pub(super) struct Batched<'a> {
     out: PairOut,
     /// The pairs of the lanes, as indices into the per-segment data.
     ids: [(u32, u32); BATCH],
+    /// The node slots of the pairs: parent and child of the first segment, then of the
+    /// second (for the loads, without going back to the per-segment data).
+    slots: [[u32; 4]; BATCH],
     params: PairParams,
     /// Per node slot: 1 / mass (see [`Broad`]).
     inv_mass: &'a [f64],
@@ -32,6 +35,7 @@ impl<'a> Batched<'a> {
             lanes: PairBatch::default(),
             out: PairOut::default(),
             ids: [(0, 0); BATCH],
+            slots: [[0; 4]; BATCH],
             params: PairParams {
                 friction: p.friction,
                 repulsion: p.repulsion,
@@ -52,8 +56,28 @@ impl<'a> Batched<'a> {
         p: &ContactParams,
         out: &mut Vec<Contact>,
     ) {
-        self.ids[self.lanes.len()] = (a as u32, b as u32);
-        if self.lanes.push(&pre[a].lane, &pre[b].lane) {
+        let (ba, bb) = (&boxes[a], &boxes[b]);
+        let slots = [ba.parent, ba.child, bb.parent, bb.child];
+        let (la, lb) = (&pre[a].lane, &pre[b].lane);
+        self.push_lanes((boxes, pre), (a, b), slots, (la, lb), p, out);
+    }
+
+    /// [`Self::push`], given the two segments' lanes and node slots (`[parent a, child a,
+    /// parent b, child b]`), from a copy the caller keeps nearer at hand.
+    #[inline(always)]
+    pub(super) fn push_lanes(
+        &mut self,
+        (boxes, pre): (&[SegBox], &[SegPre]),
+        (a, b): (usize, usize),
+        slots: [u32; 4],
+        (la, lb): (&Segment, &Segment),
+        p: &ContactParams,
+        out: &mut Vec<Contact>,
+    ) {
+        let i = self.lanes.len();
+        self.ids[i] = (a as u32, b as u32);
+        self.slots[i] = slots;
+        if self.lanes.push(la, lb) {
             self.flush((boxes, pre), p, out);
         }
     }
@@ -74,16 +98,14 @@ impl<'a> Batched<'a> {
         self.lanes.clear();
     }
 
-    /// Adds a contact's shares to the loads of its four nodes: [`Response::record`], fed
-    /// from the per-segment data.
+    /// Adds a contact's shares to the loads of its four nodes ([`Response::record`]).
     #[inline(always)]
-    fn record(&mut self, boxes: (&SegBox, &SegBox), m: f64, s: f64, t: f64) {
-        let (a, b) = boxes;
+    fn record(&mut self, slots: [u32; 4], m: f64, s: f64, t: f64) {
         for (n, share) in [
-            (a.parent, 1.0 - s),
-            (a.child, s),
-            (b.parent, 1.0 - t),
-            (b.child, t),
+            (slots[0], 1.0 - s),
+            (slots[1], s),
+            (slots[2], 1.0 - t),
+            (slots[3], t),
         ] {
             self.loads[n as usize] += share * m * self.inv_mass[n as usize];
         }
@@ -92,7 +114,7 @@ impl<'a> Batched<'a> {
     fn emit(
         &mut self,
         n: usize,
-        (boxes, pre): (&[SegBox], &[SegPre]),
+        (_, pre): (&[SegBox], &[SegPre]),
         p: &ContactParams,
         out: &mut Vec<Contact>,
     ) {
@@ -103,16 +125,15 @@ impl<'a> Batched<'a> {
             todo &= todo - 1;
             debug_assert!(i < n);
             let (a, b) = self.ids[i];
-            let (pa, pb) = (&pre[a as usize], &pre[b as usize]);
             let c = if o.rare >> i & 1 != 0 {
-                match contact(pa, pb, p) {
+                match contact(&pre[a as usize], &pre[b as usize], p) {
                     Some(c) => c,
                     None => continue,
                 }
             } else {
                 Contact {
-                    a: pa.seg,
-                    b: pb.seg,
+                    a,
+                    b,
                     s: o.s[i],
                     t: o.t[i],
                     friction: [0, 1, 2].map(|k| o.friction[k][i] as f32),
@@ -120,8 +141,8 @@ impl<'a> Batched<'a> {
                 }
             };
             // The lighter child's mass, as `Response::record` takes it.
-            let m = pa.lane.mass.min(pb.lane.mass);
-            self.record((&boxes[a as usize], &boxes[b as usize]), m, c.s, c.t);
+            let m = self.lanes.a.mass[i].min(self.lanes.b.mass[i]);
+            self.record(self.slots[i], m, c.s, c.t);
             out.push(c);
         }
     }
@@ -139,7 +160,14 @@ impl<'a> Batched<'a> {
     ) {
         for chunk in pairs_ab.chunks(BATCH) {
             for &(a, b) in chunk {
-                self.ids[self.lanes.len()] = (a as u32, b as u32);
+                let i = self.lanes.len();
+                self.ids[i] = (a as u32, b as u32);
+                self.slots[i] = [
+                    boxes[a].parent,
+                    boxes[a].child,
+                    boxes[b].parent,
+                    boxes[b].child,
+                ];
                 self.lanes.push(&pre[a].lane, &pre[b].lane);
             }
             pairs::narrow_on(level, &self.lanes, &self.params, &mut self.out);
