@@ -3,8 +3,7 @@
 //!
 //! The model is tiny-skia's `src/wide/`: a small lane type per instruction set with the same
 //! methods ([`lanes::F64x4`] and its portable twin [`lanes::F64x4Portable`]), and each operation
-//! (the narrow phase of the hair–hair collisions, [`pairs`], and their broad phase's box test,
-//! [`boxes`]) written ONCE, generically
+//! (for now the narrow phase of the hair–hair collisions, [`pairs`]) written ONCE, generically
 //! over the lane type, so both twins do the same arithmetic in the same order: IEEE additions,
 //! multiplications, divisions and square roots are exactly rounded in scalar and vector units
 //! alike, and neither twin contracts a multiplication and an addition into an FMA (the `fma`
@@ -20,7 +19,6 @@
 //! This module uses nothing of wisptree's: solvers and renderers call it, with plain arrays.
 
 pub mod blend;
-pub mod boxes;
 pub mod cull;
 pub mod dispatch;
 pub mod lanes;

@@ -3,7 +3,7 @@
 //! at once), which finds the same contacts with the same forces as [`contact`], bit for bit; the
 //! few pairs outside its general case are handed back and done by [`contact`] itself.
 
-use crate::simd::pairs::{self, PairBatch, PairOut, PairParams, Segment, BATCH};
+use crate::simd::pairs::{self, PairBatch, PairOut, PairParams, BATCH};
 
 use super::*;
 
@@ -57,27 +57,10 @@ impl<'a> Batched<'a> {
         out: &mut Vec<Contact>,
     ) {
         let (ba, bb) = (&boxes[a], &boxes[b]);
-        let slots = [ba.parent, ba.child, bb.parent, bb.child];
-        let (la, lb) = (&pre[a].lane, &pre[b].lane);
-        self.push_lanes((boxes, pre), (a, b), slots, (la, lb), p, out);
-    }
-
-    /// [`Self::push`], given the two segments' lanes and node slots (`[parent a, child a,
-    /// parent b, child b]`), from a copy the caller keeps nearer at hand.
-    #[inline(always)]
-    pub(super) fn push_lanes(
-        &mut self,
-        (boxes, pre): (&[SegBox], &[SegPre]),
-        (a, b): (usize, usize),
-        slots: [u32; 4],
-        (la, lb): (&Segment, &Segment),
-        p: &ContactParams,
-        out: &mut Vec<Contact>,
-    ) {
         let i = self.lanes.len();
         self.ids[i] = (a as u32, b as u32);
-        self.slots[i] = slots;
-        if self.lanes.push(la, lb) {
+        self.slots[i] = [ba.parent, ba.child, bb.parent, bb.child];
+        if self.lanes.push(&pre[a].lane, &pre[b].lane) {
             self.flush((boxes, pre), p, out);
         }
     }

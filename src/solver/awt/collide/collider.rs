@@ -25,8 +25,6 @@ pub(super) struct WorkerOut {
     pub(super) contacts: Vec<Contact>,
     pub(super) spans: [Option<(usize, usize)>; CHUNKS],
     pub(super) stats: PairStats,
-    /// The search's scratch: a voxel's segments in lanes ([`crate::simd::boxes`]).
-    pub(super) voxel: Box<crate::simd::boxes::VoxelScratch>,
 }
 
 /// Reused buffers of the broad phase (uniform voxel grid) and of the response, and the thread
@@ -251,14 +249,7 @@ impl HairCollider {
                 chunk.fill(0.0);
                 let o = &mut *o;
                 let start = o.contacts.len();
-                let st = broad.search(
-                    bounds[k]..bounds[k + 1],
-                    p,
-                    eps2,
-                    &mut o.contacts,
-                    chunk,
-                    &mut o.voxel,
-                );
+                let st = broad.search(bounds[k]..bounds[k + 1], p, eps2, &mut o.contacts, chunk);
                 o.stats.add(&st);
                 o.spans[k] = Some((start, o.contacts.len()));
             };

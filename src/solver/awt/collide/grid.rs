@@ -5,7 +5,6 @@ use std::ops::Range;
 use nalgebra::Vector3;
 
 use super::*;
-use crate::simd::boxes::{pairs_here, row, VoxelBox, VoxelScratch, VOXEL};
 
 /// Upper bound on the number of cells of the dense voxel grid (4 MiB of `u32` offsets), whatever
 /// the number of segments: bounds memory when a node flies away.
@@ -99,7 +98,6 @@ impl Broad {
         eps2: f64,
         out: &mut Vec<Contact>,
         loads: &mut [f64],
-        voxel: &mut VoxelScratch,
     ) -> PairStats {
         let mut stats = PairStats::default();
         let (boxes, pre) = (&self.boxes[..], &self.pre[..]);
@@ -108,59 +106,9 @@ impl Broad {
         let before = out.len();
         let mut batched = Batched::new(p, &self.inv_mass, loads);
         const INDEX: u32 = (1 << MASK_SHIFT) - 1;
-        let level = crate::simd::level();
-        // The voxel's segments in lanes, and the indices (in the voxel) of those that pass the
-        // box test against one of them: the lanes test eight pairs at once. The pairs come out
-        // in the order of the scalar loop below, so the contacts (and the sums) are the same.
-        let VoxelScratch {
-            lanes,
-            near: near_js,
-            segs: cell_segs,
-        } = voxel;
         for c in cells {
             let cell = &items[starts[c] as usize..starts[c + 1] as usize];
             if cell.len() < 2 {
-                continue;
-            }
-            if cell.len() <= VOXEL {
-                lanes.clear();
-                cell_segs.clear();
-                let mut masks = [0u32; 8];
-                for &i in cell {
-                    masks[(i >> MASK_SHIFT) as usize] += 1;
-                    let b = &boxes[(i & INDEX) as usize];
-                    lanes.push(&VoxelBox {
-                        lo: b.lo,
-                        hi: b.hi,
-                        parent: b.parent,
-                        child: b.child,
-                        chain: b.chain,
-                        mask: i >> MASK_SHIFT,
-                    });
-                    cell_segs.push(pre[(i & INDEX) as usize].lane);
-                }
-                stats.candidates += pairs_here(&masks);
-                for (k, &ia) in cell[..cell.len() - 1].iter().enumerate() {
-                    let a = (ia & INDEX) as usize;
-                    let n = row(level, lanes, k, near_js);
-                    let sa = &cell_segs[k];
-                    for &j in &near_js[..n] {
-                        let j = j as usize;
-                        let sb = &cell_segs[j];
-                        if !moving_lanes(sa, sb, eps2) {
-                            continue;
-                        }
-                        stats.tested += 1;
-                        let b = (cell[j] & INDEX) as usize;
-                        let slots = [
-                            lanes.parent[k],
-                            lanes.child[k],
-                            lanes.parent[j],
-                            lanes.child[j],
-                        ];
-                        batched.push_lanes((boxes, pre), (a, b), slots, (sa, sb), p, out);
-                    }
-                }
                 continue;
             }
             for (k, &ia) in cell.iter().enumerate() {

@@ -129,15 +129,8 @@ impl SegPre {
 /// relative speed (see the module docs) at or above `epsilon`.
 #[inline(always)]
 pub(super) fn moving(a: &SegPre, b: &SegPre, eps2: f64) -> bool {
-    moving_lanes(&a.lane, &b.lane, eps2)
-}
-
-/// [`moving`], on the narrow phase's copy of the two segments.
-#[inline(always)]
-pub(super) fn moving_lanes(a: &Segment, b: &Segment, eps2: f64) -> bool {
     // max(…) ≥ ε² as four independent comparisons (`f64::max` branches on NaN).
-    let (avp, avc) = (Vector3::from(a.vp), Vector3::from(a.vc));
-    let (bvp, bvc) = (Vector3::from(b.vp), Vector3::from(b.vc));
+    let (avp, avc, bvp, bvc) = (a.vp(), a.vc(), b.vp(), b.vc());
     ((avp - bvp).norm_squared() >= eps2)
         | ((avp - bvc).norm_squared() >= eps2)
         | ((avc - bvp).norm_squared() >= eps2)
