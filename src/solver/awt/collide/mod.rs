@@ -68,6 +68,13 @@
 //!   the noise of one another. The dense array is capped at [`CELLS_PER_SEGMENT`] cells per
 //!   segment (clearing and scanning it cost per cell) and at [`MAX_CELLS`] in all (the cell side
 //!   grows instead), which bounds time and memory when a node flies away.
+//! * **The candidate loop stays scalar.** Testing a voxel's segments eight pairs at a time (box,
+//!   adjacency and relative-motion tests in AVX2 lanes over a per-voxel copy) was tried and
+//!   measured no faster, under `lean` and under `shake` at split threshold 0.05 alike: the
+//!   mask test rejects most visits for a few instructions, and the cost is in the pairs that
+//!   pass (copying them into the narrow phase's lanes, the closest points, the response), about
+//!   90 % of a step at split 0.05 (≈ 280 k contacts per step on `long_curly` in the first
+//!   second, 800 k later), against ≈ 1 % for the grid and ≈ 2 % for the adaptation.
 //! * **Filters are conservative and shared.** Box overlap (each box inflated by its own radius
 //!   and rounded outwards to f32, so two boxes overlap whenever the segments are within
 //!   `r1 + r2` on every axis), adjacency and the
