@@ -735,6 +735,25 @@ fn two_threads_give_bit_identical_forces() {
         shared_contacts > 500,
         "scenes too sparse: {shared_contacts}"
     );
+
+    // A scene dense enough for the response to be shared too (at least 8192 contacts, cut in
+    // two halves): the same forces on one thread or two, and the brute force's up to rounding.
+    let s = Scene::random(&mut rng, 300, 14, 0.04, 0.03);
+    let (f1, st1) = run(&mut one, &s, &p);
+    let (f2, st2) = run(&mut two, &s, &p);
+    assert!(st1.in_contact >= 8192, "scene too sparse: {st1:?}");
+    assert_eq!(st1, st2);
+    assert!(
+        f1 == f2,
+        "dense scene: forces differ between 1 and 2 threads"
+    );
+    let mut fb = vec![V::zeros(); s.pos.len()];
+    let sb = accumulate_brute_force(&s.view(), &s.pos, &s.vel, &p, &mut fb);
+    assert_eq!(sb.in_contact, st1.in_contact);
+    let scale = max_norm(&fb).max(1e-30);
+    for (a, b) in f2.iter().zip(&fb) {
+        assert!((a - b).norm() <= 1e-12 * scale, "{a:?} vs {b:?}");
+    }
 }
 
 /// Two segments of one GC (chain) never collide, even far from adjacent and crossing: a wisp's

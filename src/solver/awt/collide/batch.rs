@@ -17,6 +17,9 @@ pub(super) struct Batched<'a> {
     out: PairOut,
     /// The pairs of the lanes, as indices into the per-segment data.
     ids: [(u32, u32); BATCH],
+    /// The node slots of the pairs: parent and child of the first segment, then of the
+    /// second (for the loads, without going back to the per-segment data).
+    slots: [[u32; 4]; BATCH],
     params: PairParams,
     /// Per node slot: 1 / mass (see [`Broad`]).
     inv_mass: &'a [f64],
@@ -32,6 +35,7 @@ impl<'a> Batched<'a> {
             lanes: PairBatch::default(),
             out: PairOut::default(),
             ids: [(0, 0); BATCH],
+            slots: [[0; 4]; BATCH],
             params: PairParams {
                 friction: p.friction,
                 repulsion: p.repulsion,
@@ -52,7 +56,10 @@ impl<'a> Batched<'a> {
         p: &ContactParams,
         out: &mut Vec<Contact>,
     ) {
-        self.ids[self.lanes.len()] = (a as u32, b as u32);
+        let (ba, bb) = (&boxes[a], &boxes[b]);
+        let i = self.lanes.len();
+        self.ids[i] = (a as u32, b as u32);
+        self.slots[i] = [ba.parent, ba.child, bb.parent, bb.child];
         if self.lanes.push(&pre[a].lane, &pre[b].lane) {
             self.flush((boxes, pre), p, out);
         }
@@ -74,16 +81,14 @@ impl<'a> Batched<'a> {
         self.lanes.clear();
     }
 
-    /// Adds a contact's shares to the loads of its four nodes: [`Response::record`], fed
-    /// from the per-segment data.
+    /// Adds a contact's shares to the loads of its four nodes ([`Response::record`]).
     #[inline(always)]
-    fn record(&mut self, boxes: (&SegBox, &SegBox), m: f64, s: f64, t: f64) {
-        let (a, b) = boxes;
+    fn record(&mut self, slots: [u32; 4], m: f64, s: f64, t: f64) {
         for (n, share) in [
-            (a.parent, 1.0 - s),
-            (a.child, s),
-            (b.parent, 1.0 - t),
-            (b.child, t),
+            (slots[0], 1.0 - s),
+            (slots[1], s),
+            (slots[2], 1.0 - t),
+            (slots[3], t),
         ] {
             self.loads[n as usize] += share * m * self.inv_mass[n as usize];
         }
@@ -92,7 +97,7 @@ impl<'a> Batched<'a> {
     fn emit(
         &mut self,
         n: usize,
-        (boxes, pre): (&[SegBox], &[SegPre]),
+        (_, pre): (&[SegBox], &[SegPre]),
         p: &ContactParams,
         out: &mut Vec<Contact>,
     ) {
@@ -103,16 +108,15 @@ impl<'a> Batched<'a> {
             todo &= todo - 1;
             debug_assert!(i < n);
             let (a, b) = self.ids[i];
-            let (pa, pb) = (&pre[a as usize], &pre[b as usize]);
             let c = if o.rare >> i & 1 != 0 {
-                match contact(pa, pb, p) {
+                match contact(&pre[a as usize], &pre[b as usize], p) {
                     Some(c) => c,
                     None => continue,
                 }
             } else {
                 Contact {
-                    a: pa.seg,
-                    b: pb.seg,
+                    a,
+                    b,
                     s: o.s[i],
                     t: o.t[i],
                     friction: [0, 1, 2].map(|k| o.friction[k][i] as f32),
@@ -120,8 +124,8 @@ impl<'a> Batched<'a> {
                 }
             };
             // The lighter child's mass, as `Response::record` takes it.
-            let m = pa.lane.mass.min(pb.lane.mass);
-            self.record((&boxes[a as usize], &boxes[b as usize]), m, c.s, c.t);
+            let m = self.lanes.a.mass[i].min(self.lanes.b.mass[i]);
+            self.record(self.slots[i], m, c.s, c.t);
             out.push(c);
         }
     }
@@ -139,7 +143,14 @@ impl<'a> Batched<'a> {
     ) {
         for chunk in pairs_ab.chunks(BATCH) {
             for &(a, b) in chunk {
-                self.ids[self.lanes.len()] = (a as u32, b as u32);
+                let i = self.lanes.len();
+                self.ids[i] = (a as u32, b as u32);
+                self.slots[i] = [
+                    boxes[a].parent,
+                    boxes[a].child,
+                    boxes[b].parent,
+                    boxes[b].child,
+                ];
                 self.lanes.push(&pre[a].lane, &pre[b].lane);
             }
             pairs::narrow_on(level, &self.lanes, &self.params, &mut self.out);

@@ -1,15 +1,35 @@
 //! The hair–hair collider: one step's broad phase, narrow phase and response, on one or two threads.
 
-use std::sync::atomic::Ordering;
-use std::sync::{Arc, RwLock};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Mutex;
 
 use nalgebra::Vector3;
 
 use super::*;
+use crate::par::{split_parts, Pool};
 
-/// Reused buffers of the broad phase (uniform voxel grid) and of the response, and the helper
-/// thread that shares the pair search. Allocation only while warming up (or never, with
-/// [`HairCollider::with_capacity`] from the model's size).
+/// Chunks of cells the pair search is cut into: enough for two threads to even out, few
+/// enough that each chunk's per-node loads stay cheap to add.
+pub(super) const CHUNKS: usize = 8;
+
+/// Parts the contact list is cut into for the response (see [`HairCollider`]).
+pub(super) const PARTS: usize = 2;
+
+/// Below this many contacts the response stays on the calling thread (waking the helper
+/// costs more than half the work).
+pub(super) const MIN_CONTACTS_TO_SHARE: usize = 8192;
+
+/// One worker's contacts: the chunks it searched, and for each its span in `contacts`.
+#[derive(Default)]
+pub(super) struct WorkerOut {
+    pub(super) contacts: Vec<Contact>,
+    pub(super) spans: [Option<(usize, usize)>; CHUNKS],
+    pub(super) stats: PairStats,
+}
+
+/// Reused buffers of the broad phase (uniform voxel grid) and of the response, and the thread
+/// pool ([`crate::par::Pool`]) that shares the pair search and the response. Allocation only
+/// while warming up (or never, with [`HairCollider::with_capacity`] from the model's size).
 ///
 /// The grid is dense over the segments' bounding box and filled by a counting sort. Each item of
 /// a cell list is a segment index with, in its top 3 bits, a mask saying along which axes the
@@ -22,29 +42,31 @@ use super::*;
 /// whole scene fits in L1), and [`SegPre`] (positions, velocities, f64) only for the pairs that
 /// pass the box and adjacency tests.
 ///
-/// **Two threads, same result.** With [`Self::set_threads`]`(2)` the cells are cut into
-/// [`CHUNKS`] runs of about equal work, and the caller and a helper thread (spawned once, then
-/// parked on a condition variable) claim them from an atomic counter until none is left. If the
-/// helper is slow to wake (the logging thread or another job holds the other core), the caller
-/// simply does more chunks, so sharing never costs much more than one thread. One thread cuts
-/// the cells into the same chunks. Each chunk sums the loads of its own contacts as it finds
-/// them (on whichever thread searched it); the chunks' loads are then added, and the forces
-/// applied, chunk by chunk in cell order, so the forces are bit-identical whatever the thread
-/// count and whoever did which chunk. The
-/// helper works on buffers it keeps, so a warm step allocates nothing (rayon's injector would:
-/// see the module docs).
+/// **Two threads, same result.** The cells are cut into [`CHUNKS`] runs of about equal work,
+/// and with [`Self::set_threads`]`(2)` the caller and the pool's helper claim them until none
+/// is left ([`Pool::for_each_worker`]). If the helper is slow to wake (the logging thread or
+/// another job holds the other core), the caller simply does more chunks and does not wait
+/// for it, so sharing never costs much more than one thread. Each chunk sums the loads of its
+/// own contacts as it finds them (on whichever thread searched it); the chunks' loads are then
+/// added in chunk order. The response then cuts the contacts, in chunk (= cell) order, into
+/// [`PARTS`] halves, each adding its forces into a buffer of its own, and the buffers are added
+/// to the forces in part order. Neither cut depends on the thread count or on who did what,
+/// so the forces are bit-identical on one thread or two. Each worker pushes into buffers it
+/// keeps, so a warm step allocates nothing.
 pub struct HairCollider {
-    pub(super) broad: Arc<RwLock<Broad>>,
-    pub(super) contacts: Vec<Contact>,
+    pub(super) broad: Broad,
+    /// Per pool worker (the caller is worker 0).
+    pub(super) out: [Mutex<WorkerOut>; 2],
     /// Per node slot: the load, then the repulsion scale (scratch of [`Response`]).
     pub(super) load: Vec<f64>,
-    /// Per chunk of the search and node slot: the loads of the chunk's contacts (the chunks
-    /// this thread searched).
+    /// Per chunk of the search and node slot: the loads of the chunk's contacts.
     pub(super) chunk_loads: Vec<f64>,
+    /// Per part of the response and node slot: the part's forces.
+    pub(super) part_force: Vec<Vector3<f64>>,
     /// Per node slot: 1 / mass, then the friction scale (scratch of [`Response`]).
     pub(super) inv_mass: Vec<f64>,
     pub(super) threads: usize,
-    pub(super) helper: Option<Helper>,
+    pub(super) pool: Option<Pool>,
     /// Contacts the helper thread found in the last call.
     pub(super) helper_contacts: u32,
     /// Wait for the helper to pick up each search before claiming chunks (tests).
@@ -64,7 +86,8 @@ impl HairCollider {
     }
 
     /// A collider whose buffers already hold `segments` segments over `nodes` node slots and
-    /// `contacts` contacts, so that steps within those sizes never allocate. One thread.
+    /// `contacts` contacts (per worker), so that steps within those sizes never allocate. One
+    /// thread.
     pub fn with_capacity(segments: usize, nodes: usize, contacts: usize) -> Self {
         let cells = if segments == 0 {
             0
@@ -81,30 +104,35 @@ impl HairCollider {
             grid: GridInfo::default(),
             inv_mass: Vec::with_capacity(nodes),
         };
+        let out = || {
+            Mutex::new(WorkerOut {
+                contacts: Vec::with_capacity(contacts),
+                ..WorkerOut::default()
+            })
+        };
         HairCollider {
-            broad: Arc::new(RwLock::new(broad)),
-            contacts: Vec::with_capacity(contacts),
+            broad,
+            out: [out(), out()],
             load: Vec::with_capacity(nodes),
             chunk_loads: Vec::with_capacity(CHUNKS * nodes),
+            part_force: Vec::with_capacity(PARTS * nodes),
             inv_mass: Vec::with_capacity(nodes),
             threads: 1,
-            helper: None,
+            pool: None,
             helper_contacts: 0,
             helper_first: false,
         }
     }
 
-    /// Threads used by the pair search: 1, or 2 (more are treated as 2). The forces do not
-    /// depend on it. The helper thread starts here (once), with room for as many contacts as
-    /// this collider has reserved, so no later step allocates for it.
+    /// Threads used by the pair search and the response: 1, or 2 (more are treated as 2).
+    /// The forces do not depend on it. The pool's helper thread starts here (once).
     pub fn set_threads(&mut self, threads: usize) {
         self.threads = threads.clamp(1, 2);
-        if self.threads > 1 && self.helper.is_none() {
-            self.helper = Some(Helper::spawn(
-                self.broad.clone(),
-                self.contacts.capacity(),
-                self.chunk_loads.capacity(),
-            ));
+        if self.threads > 1 && self.pool.is_none() {
+            self.pool = Some(
+                Pool::named(2, "wisptree-collide")
+                    .unwrap_or_else(|e| panic!("the collider's thread pool: {e}")),
+            );
         }
     }
 
@@ -128,24 +156,25 @@ impl HairCollider {
 
     /// The grid built by the last call to [`Self::accumulate`].
     pub fn grid(&self) -> GridInfo {
-        read(&self.broad).grid
+        self.broad.grid
     }
 
     /// Bytes reserved by the reused buffers (stays constant once warmed up on a scene size).
     pub fn capacity_bytes(&self) -> usize {
-        let b = read(&self.broad);
-        let helper = self.helper.as_ref().map_or(0, |h| {
-            let job = lock(&h.shared.job);
-            job.contacts.capacity() * std::mem::size_of::<Contact>() + job.loads.capacity() * 8
-        });
+        let b = &self.broad;
+        let out: usize = self
+            .out
+            .iter()
+            .map(|o| lock(o).contacts.capacity() * std::mem::size_of::<Contact>())
+            .sum();
         b.boxes.capacity() * std::mem::size_of::<SegBox>()
             + b.pre.capacity() * std::mem::size_of::<SegPre>()
             + (b.lo.capacity() + b.hi.capacity()) * std::mem::size_of::<[u32; 3]>()
             + (b.cell_start.capacity() + b.items.capacity()) * 4
-            + self.contacts.capacity() * std::mem::size_of::<Contact>()
+            + out
             + (self.load.capacity() + self.inv_mass.capacity() + self.chunk_loads.capacity()) * 8
+            + self.part_force.capacity() * std::mem::size_of::<Vector3<f64>>()
             + b.inv_mass.capacity() * 8
-            + helper
     }
 
     /// Adds the hair–hair friction and repulsion forces to `force` (indexed by slot).
@@ -167,7 +196,7 @@ impl HairCollider {
         );
         let nodes = force.len();
         {
-            let mut b = write(&self.broad);
+            let b = &mut self.broad;
             b.boxes.clear();
             b.boxes.extend((0..n).map(|i| SegBox::new(segs, pos, i)));
             b.pre.clear();
@@ -181,74 +210,78 @@ impl HairCollider {
             }
         }
         let eps2 = p.epsilon * p.epsilon;
-        self.contacts.clear();
-        let broad = read(&self.broad);
+        let broad = &self.broad;
         let mut response = Response::new(segs, nodes, &mut self.inv_mass, &mut self.load);
-        self.helper_contacts = 0;
         // The search is cut into CHUNKS runs of cells whatever the thread count, and each
         // chunk sums its own loads: the loads are then the chunks' sums added in chunk order,
         // so they are the same bit for bit on one thread or two.
         let bounds = broad.chunk_bounds();
-        let shared = self.threads > 1 && n >= MIN_SEGMENTS_TO_SHARE;
-        let helper = self.helper.as_ref().filter(|_| shared);
-        if let Some(h) = helper {
-            h.start(bounds, *p, self.helper_first);
-        }
+        let pool = self
+            .pool
+            .as_ref()
+            .filter(|_| self.threads > 1 && n >= MIN_SEGMENTS_TO_SHARE);
         if self.chunk_loads.len() != CHUNKS * nodes {
             self.chunk_loads.clear();
             self.chunk_loads.resize(CHUNKS * nodes, 0.0);
         }
-        // Claim chunks until none is left; the helper does the same, so if it is slow to wake
-        // (a busy machine) this thread simply does more of them.
-        let mut stats = PairStats::default();
-        let mut spans = [None; CHUNKS];
-        let mut next = 0;
-        loop {
-            let k = match helper {
-                Some(h) => h.shared.next.fetch_add(1, Ordering::AcqRel),
-                None => {
-                    next += 1;
-                    next - 1
+        for o in &mut self.out {
+            let o = o.get_mut().unwrap_or_else(|e| e.into_inner());
+            o.contacts.clear();
+            o.spans = [None; CHUNKS];
+            o.stats = PairStats::default();
+        }
+        {
+            let loads = split_parts::<_, CHUNKS>(&mut self.chunk_loads, |k| (k + 1) * nodes);
+            let out = &self.out;
+            let helper_started = AtomicBool::new(false);
+            let helper_first = self.helper_first && pool.is_some();
+            let search = |worker: usize, k: usize| {
+                if worker > 0 {
+                    helper_started.store(true, Ordering::Release);
+                } else if helper_first {
+                    while !helper_started.load(Ordering::Acquire) {
+                        std::thread::yield_now();
+                    }
                 }
+                let mut o = lock(&out[worker]);
+                let mut chunk = lock(&loads[k]);
+                let chunk = &mut *chunk.1;
+                chunk.fill(0.0);
+                let o = &mut *o;
+                let start = o.contacts.len();
+                let st = broad.search(bounds[k]..bounds[k + 1], p, eps2, &mut o.contacts, chunk);
+                o.stats.add(&st);
+                o.spans[k] = Some((start, o.contacts.len()));
             };
-            if k >= CHUNKS {
-                break;
+            match pool {
+                Some(pool) => pool.for_each_worker(CHUNKS, &search),
+                None => (0..CHUNKS).for_each(|k| search(0, k)),
             }
-            let start = self.contacts.len();
-            let loads = &mut self.chunk_loads[k * nodes..(k + 1) * nodes];
-            loads.fill(0.0);
-            stats.add(&broad.search(bounds[k]..bounds[k + 1], p, eps2, &mut self.contacts, loads));
-            spans[k] = Some((start, self.contacts.len()));
         }
-        let job = helper.map(|h| h.finish());
-        if let Some(job) = &job {
-            stats.add(&job.stats);
-            self.helper_contacts = job.stats.in_contact;
-        }
+        let [o0, o1] = &mut self.out;
+        // The pool is done: nothing else holds the locks.
+        let out: [&WorkerOut; 2] =
+            [o0, o1].map(|o| &*o.get_mut().unwrap_or_else(|e| e.into_inner()));
+        let mut stats = PairStats::default();
+        stats.add(&out[0].stats);
+        stats.add(&out[1].stats);
+        self.helper_contacts = out[1].stats.in_contact;
         // The contacts chunk by chunk, i.e. in cell order: the one-thread order.
-        let pick = |k: usize| match (spans[k], &job) {
-            (Some((a, b)), _) => (
-                &self.contacts[a..b],
+        let pick = |k: usize| {
+            let (w, (a, b)) = (0..2)
+                .find_map(|w| out[w].spans[k].map(|s| (w, s)))
+                .expect("every chunk is searched by one of the threads");
+            (
+                &out[w].contacts[a..b],
                 &self.chunk_loads[k * nodes..(k + 1) * nodes],
-            ),
-            (None, Some(job)) => {
-                let (a, b) = job.spans[k];
-                (&job.contacts[a..b], &job.loads[k * nodes..(k + 1) * nodes])
-            }
-            (None, None) => unreachable!("every chunk is searched by one of the threads"),
+            )
         };
         let lists: [&[Contact]; CHUNKS] = std::array::from_fn(|k| pick(k).0);
         let loads: [&[f64]; CHUNKS] = std::array::from_fn(|k| pick(k).1);
         response.add_loads(&loads);
-        response.apply(&lists, segs, p, force);
+        let total: usize = lists.iter().map(|l| l.len()).sum();
+        let pool = pool.filter(|_| total >= MIN_CONTACTS_TO_SHARE);
+        response.apply_parts(&lists, segs, p, &mut self.part_force, pool, force);
         stats
-    }
-}
-
-impl Drop for HairCollider {
-    fn drop(&mut self) {
-        if let Some(h) = self.helper.take() {
-            h.stop();
-        }
     }
 }

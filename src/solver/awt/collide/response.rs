@@ -84,39 +84,100 @@ impl<'a> Response<'a> {
         }
     }
 
-    /// Scales each contact by the loads of its nodes and adds its forces (eq. 3).
+    /// Turns the loads into the per-node scales: `inv_mass` becomes the friction scale and
+    /// `load` the repulsion scale.
     ///
     /// `1 / max(1, k·W)` with `W` the largest of the four loads is the smallest of the four
     /// nodes' `1 / max(1, k·W_n)` (the map is decreasing), so the scales are computed once per
     /// node instead of twice per contact.
+    fn scales(&mut self, p: &ContactParams) {
+        let (kf, kr) = (2.0 * p.friction * p.dt, 2.0 * p.repulsion * p.dt * p.dt);
+        for (f, w) in self.inv_mass.iter_mut().zip(self.load.iter_mut()) {
+            *f = 1.0 / (kf * *w).max(1.0);
+            *w = 1.0 / (kr * *w).max(1.0);
+        }
+    }
+
+    /// Scales each contact by the loads of its nodes and adds its forces (eq. 3).
     pub(super) fn apply(
-        self,
+        mut self,
         lists: &[&[Contact]],
         segs: &SegmentsView,
         p: &ContactParams,
         force: &mut [Vector3<f64>],
     ) {
-        let (kf, kr) = (2.0 * p.friction * p.dt, 2.0 * p.repulsion * p.dt * p.dt);
-        let (fric, rep) = (&mut self.inv_mass[..], &mut self.load[..]);
-        for (f, w) in fric.iter_mut().zip(rep.iter_mut()) {
-            *f = 1.0 / (kf * *w).max(1.0);
-            *w = 1.0 / (kr * *w).max(1.0);
-        }
+        self.scales(p);
         for c in lists.iter().flat_map(|l| l.iter()) {
-            let (a, b) = (c.a as usize, c.b as usize);
-            let (pa, ca) = (segs.parent[a] as usize, segs.child[a] as usize);
-            let (pb, cb) = (segs.parent[b] as usize, segs.child[b] as usize);
-            let fs = fric[pa].min(fric[ca]).min(fric[pb]).min(fric[cb]);
-            let rs = rep[pa].min(rep[ca]).min(rep[pb]).min(rep[cb]);
-            let f = widen(c.friction) * fs + widen(c.repulsion) * rs;
-            // Eq. 3: F at P = (1 − s)·N_p + s·N_c goes (1 − s)·F to the parent, s·F to the
-            // child.
-            let fa_child = f * c.s;
-            force[pa] += f - fa_child;
-            force[ca] += fa_child;
-            let fb_child = f * c.t;
-            force[pb] -= f - fb_child;
-            force[cb] -= fb_child;
+            add_contact(c, segs, self.inv_mass, self.load, force);
         }
     }
+
+    /// [`Self::apply`] with the contacts (the lists joined in order) cut into [`PARTS`] parts
+    /// of equal length, each summed into its own buffer in `part_force` (on `pool` when there
+    /// is one), and the buffers added to `force` in part order. The cut depends only on the
+    /// number of contacts, so the sums are the same bit for bit with or without the pool.
+    pub(super) fn apply_parts(
+        mut self,
+        lists: &[&[Contact]; CHUNKS],
+        segs: &SegmentsView,
+        p: &ContactParams,
+        part_force: &mut Vec<Vector3<f64>>,
+        pool: Option<&crate::par::Pool>,
+        force: &mut [Vector3<f64>],
+    ) {
+        self.scales(p);
+        let nodes = force.len();
+        part_force.clear();
+        part_force.resize(PARTS * nodes, Vector3::zeros());
+        let total: usize = lists.iter().map(|l| l.len()).sum();
+        let (fric, rep) = (&self.inv_mass[..], &self.load[..]);
+        {
+            let parts = crate::par::split_parts::<_, PARTS>(part_force, |k| (k + 1) * nodes);
+            let run = |k: usize| {
+                let (from, to) = (total * k / PARTS, total * (k + 1) / PARTS);
+                let mut part = lock(&parts[k]);
+                let f = &mut *part.1;
+                let mut at = 0;
+                for l in lists {
+                    let (lo, hi) = (from.max(at), to.min(at + l.len()));
+                    if lo < hi {
+                        for c in &l[lo - at..hi - at] {
+                            add_contact(c, segs, fric, rep, f);
+                        }
+                    }
+                    at += l.len();
+                }
+            };
+            crate::par::for_each_on(pool, PARTS, &run);
+        }
+        for part in part_force.chunks_exact(nodes) {
+            for (f, x) in force.iter_mut().zip(part) {
+                *f += x;
+            }
+        }
+    }
+}
+
+/// Adds one contact's forces, scaled by the scales of its nodes, to its four nodes (eq. 3).
+#[inline(always)]
+fn add_contact(
+    c: &Contact,
+    segs: &SegmentsView,
+    fric: &[f64],
+    rep: &[f64],
+    force: &mut [Vector3<f64>],
+) {
+    let (a, b) = (c.a as usize, c.b as usize);
+    let (pa, ca) = (segs.parent[a] as usize, segs.child[a] as usize);
+    let (pb, cb) = (segs.parent[b] as usize, segs.child[b] as usize);
+    let fs = fric[pa].min(fric[ca]).min(fric[pb]).min(fric[cb]);
+    let rs = rep[pa].min(rep[ca]).min(rep[pb]).min(rep[cb]);
+    let f = widen(c.friction) * fs + widen(c.repulsion) * rs;
+    // Eq. 3: F at P = (1 − s)·N_p + s·N_c goes (1 − s)·F to the parent, s·F to the child.
+    let fa_child = f * c.s;
+    force[pa] += f - fa_child;
+    force[ca] += fa_child;
+    let fb_child = f * c.t;
+    force[pb] -= f - fb_child;
+    force[cb] -= fb_child;
 }
