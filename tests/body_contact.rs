@@ -69,3 +69,8 @@ fn check(kind: SolverKind) {
 fn layered_node_centres_stay_out_of_the_body() {
     check(SolverKind::Layered);
 }
+
+#[test]
+fn guide_node_centres_stay_out_of_the_body() {
+    check(SolverKind::Guides);
+}
