@@ -736,8 +736,9 @@ fn two_threads_give_bit_identical_forces() {
         "scenes too sparse: {shared_contacts}"
     );
 
-    // A scene dense enough for the response to be shared too (at least 8192 contacts, cut in
-    // two halves): the same forces on one thread or two, and the brute force's up to rounding.
+    // The response shared too (cut in two halves, one per thread): the same forces on one
+    // thread or two, and the brute force's up to rounding.
+    two.set_min_contacts_to_share(1000);
     let s = Scene::random(&mut rng, 300, 14, 0.04, 0.03);
     let (f1, st1) = run(&mut one, &s, &p);
     let (f2, st2) = run(&mut two, &s, &p);

@@ -15,9 +15,14 @@ pub(super) const CHUNKS: usize = 8;
 /// Parts the contact list is cut into for the response (see [`HairCollider`]).
 pub(super) const PARTS: usize = 2;
 
-/// Below this many contacts the response stays on the calling thread (waking the helper
-/// costs more than half the work).
-pub(super) const MIN_CONTACTS_TO_SHARE: usize = 8192;
+/// Below this many contacts the response stays on the calling thread. Sharing it is a second
+/// hand-over per step, and one the caller cannot take back once the helper has started its
+/// half: on a busy two-core machine (the logging thread holds the other core in a live run) a
+/// helper descheduled in the middle of its half stalls the step. Worth it only where the
+/// response is milliseconds long: at the page's lowest split threshold (140–280 k contacts
+/// per step under `shake`), not at the styles' defaults (20–90 k). The forces do not depend on
+/// it (the halves are the same either way).
+pub(super) const MIN_CONTACTS_TO_SHARE: usize = 100_000;
 
 /// One worker's contacts: the chunks it searched, and for each its span in `contacts`.
 #[derive(Default)]
@@ -71,6 +76,8 @@ pub struct HairCollider {
     pub(super) helper_contacts: u32,
     /// Wait for the helper to pick up each search before claiming chunks (tests).
     pub(super) helper_first: bool,
+    /// Contacts from which the response is shared ([`MIN_CONTACTS_TO_SHARE`]; tests lower it).
+    pub(super) min_contacts_to_share: usize,
 }
 
 impl Default for HairCollider {
@@ -121,6 +128,7 @@ impl HairCollider {
             pool: None,
             helper_contacts: 0,
             helper_first: false,
+            min_contacts_to_share: MIN_CONTACTS_TO_SHARE,
         }
     }
 
@@ -147,6 +155,13 @@ impl HairCollider {
     #[doc(hidden)]
     pub fn set_helper_first(&mut self, on: bool) {
         self.helper_first = on;
+    }
+
+    /// Shares the response from `n` contacts on instead of [`MIN_CONTACTS_TO_SHARE`], so that
+    /// tests reach the shared response with small scenes. The result is the same either way.
+    #[doc(hidden)]
+    pub fn set_min_contacts_to_share(&mut self, n: usize) {
+        self.min_contacts_to_share = n;
     }
 
     /// How many of the last call's contacts the helper thread found (0 on one thread).
@@ -280,7 +295,7 @@ impl HairCollider {
         let loads: [&[f64]; CHUNKS] = std::array::from_fn(|k| pick(k).1);
         response.add_loads(&loads);
         let total: usize = lists.iter().map(|l| l.len()).sum();
-        let pool = pool.filter(|_| total >= MIN_CONTACTS_TO_SHARE);
+        let pool = pool.filter(|_| total >= self.min_contacts_to_share);
         response.apply_parts(&lists, segs, p, &mut self.part_force, pool, force);
         stats
     }

@@ -73,8 +73,8 @@
 //!   measured no faster, under `lean` and under `shake` at split threshold 0.05 alike: the
 //!   mask test rejects most visits for a few instructions, and the cost is in the pairs that
 //!   pass (copying them into the narrow phase's lanes, the closest points, the response), about
-//!   90 % of a step at split 0.05 (≈ 280 k contacts per step on `long_curly` in the first
-//!   second, 800 k later), against ≈ 1 % for the grid and ≈ 2 % for the adaptation.
+//!   90 % of a step at split 0.05 (≈ 280 k contacts per step on `long_curly` over the first
+//!   second of `shake`), against ≈ 1 % for the grid and ≈ 2 % for the adaptation.
 //! * **Filters are conservative and shared.** Box overlap (each box inflated by its own radius
 //!   and rounded outwards to f32, so two boxes overlap whenever the segments are within
 //!   `r1 + r2` on every axis), adjacency and the
