@@ -829,7 +829,7 @@ pub fn closest_segments(
     q1: &Vector3<f64>,
     q2: &Vector3<f64>,
 ) -> (f64, f64) {
-    crate::solver::awt::collide::closest_segment_params(p1, p2, q1, q2)
+    crate::solver::common::closest_segment_params(p1, p2, q1, q2)
 }
 
 /// The point of triangle `t` closest to `p`, and its barycentric weights (Ericson, §5.1.5).

@@ -242,76 +242,10 @@ pub(super) fn any_perpendicular(u: &Vector3<f64>) -> Vector3<f64> {
     u.cross(&axis).normalize()
 }
 
-/// Closest points between segments `[a1, b1]` and `[a2, b2]` (Ericson, *Real-Time Collision
-/// Detection* §5.1.9, as in parry), in f64. Returns `(s, t)` with the closest points
-/// `a1 + s·(b1 − a1)` and `a2 + t·(b2 − a2)`, both in `[0, 1]`. For parallel overlapping segments
-/// `s` is the middle of the overlap.
-pub fn closest_segment_params(
-    a1: &Vector3<f64>,
-    b1: &Vector3<f64>,
-    a2: &Vector3<f64>,
-    b2: &Vector3<f64>,
-) -> (f64, f64) {
-    let d1 = b1 - a1;
-    let d2 = b2 - a2;
-    closest_params(a1, &d1, d1.norm_squared(), a2, &d2, d2.norm_squared())
-}
-
-/// [`closest_segment_params`] from the first points, the directions `d = b − a` and their squared
-/// lengths (computed once per segment by the caller).
-#[inline]
-pub(super) fn closest_params(
-    a1: &Vector3<f64>,
-    d1: &Vector3<f64>,
-    a: f64,
-    a2: &Vector3<f64>,
-    d2: &Vector3<f64>,
-    e: f64,
-) -> (f64, f64) {
-    let r = a1 - a2;
-    let f = d2.dot(&r);
-    // Relative to the scene: a segment shorter than 1e-12 of the other or of the gap is a point.
-    let scale = a.max(e).max(r.norm_squared());
-    let tiny = 1e-24 * scale;
-    if a <= tiny && e <= tiny {
-        return (0.0, 0.0);
-    }
-    if a <= tiny {
-        return (0.0, (f / e).clamp(0.0, 1.0));
-    }
-    let c = d1.dot(&r);
-    if e <= tiny {
-        return ((-c / a).clamp(0.0, 1.0), 0.0);
-    }
-    let b = d1.dot(d2);
-    let denom = a * e - b * b; // = |d1 × d2|² ≥ 0
-    let mut s = if denom > 1e-12 * a * e {
-        ((b * f - c * e) / denom).clamp(0.0, 1.0)
-    } else {
-        // Parallel: seg 2's ends project on seg 1 at -c/a and (b - c)/a.
-        // The minima and maxima are written as comparisons (`f64::min` leaves the sign of a
-        // zero to the platform) so that the batched lanes (`crate::simd::pairs`) agree bit
-        // for bit.
-        let (p, q) = (-c / a, (b - c) / a);
-        let min_sel = |x: f64, y: f64| if y < x { y } else { x };
-        let max_sel = |x: f64, y: f64| if y > x { y } else { x };
-        let (lo, hi) = (max_sel(min_sel(p, q), 0.0), min_sel(max_sel(p, q), 1.0));
-        if lo <= hi {
-            0.5 * (lo + hi)
-        } else {
-            (0.5 * (p + q)).clamp(0.0, 1.0)
-        }
-    };
-    let mut t = (b * s + f) / e;
-    if t < 0.0 {
-        t = 0.0;
-        s = (-c / a).clamp(0.0, 1.0);
-    } else if t > 1.0 {
-        t = 1.0;
-        s = ((b - c) / a).clamp(0.0, 1.0);
-    }
-    (s, t)
-}
+// The closest points of two segments are shared with the guide model's strips:
+// `crate::solver::common::{closest_segment_params, closest_params}`.
+pub(super) use crate::solver::common::closest_params;
+pub use crate::solver::common::closest_segment_params;
 
 #[cfg(test)]
 mod tests {
