@@ -342,3 +342,21 @@ fn the_split_threshold_has_one_unit_everywhere() {
         );
     }
 }
+
+/// Issue 26 §2: a file a reader can hold in mind. A file past this is split by concern.
+const MAX_LINES: usize = 650;
+
+#[test]
+fn no_source_file_is_over_650_lines() {
+    let long: Vec<String> = rust_files(&root().join("src"))
+        .into_iter()
+        .filter_map(|f| {
+            let n = read(&f).lines().count();
+            (n > MAX_LINES).then(|| format!("{} ({n} lines)", f.display()))
+        })
+        .collect();
+    assert!(
+        long.is_empty(),
+        "split these by concern (at most {MAX_LINES} lines): {long:?}"
+    );
+}

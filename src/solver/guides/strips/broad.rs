@@ -1,0 +1,341 @@
+//! The strips' broad phase (Chang, Jin, Yu 2002, §4.2): candidate segment–segment and
+//! vertex–triangle pairs from a uniform grid, cut into fixed pieces for the pool's threads.
+
+use super::*;
+
+impl Strips {
+    /// Broad phase: finds segment–segment pairs of different guides whose boxes, each grown
+    /// by `reach / 2`, overlap, and vertex–triangle pairs (vertex not on the triangle's guides,
+    /// triangle intact) that may be closer than `reach`; both only if they cross by at least
+    /// [`MIN_CROSSING`]. `alive`: the guide slots simulated. On the calling thread.
+    pub fn detect(&mut self, chains: &Chains, alive: &[usize], reach: f64) {
+        self.detect_on(None, chains, alive, reach);
+    }
+
+    /// [`Strips::detect`] on the threads of `pool` (the same candidates in the same order).
+    ///
+    /// Every element's box, direction and grid cells are computed once. A vertex is tested
+    /// only against the triangles whose box grown by `reach` holds it, and kept when it is
+    /// within `reach` of the triangle's plane and of each edge's line on the triangle's outer
+    /// side (the triangle's prism grown by `reach`): a test of four dot products that keeps
+    /// every vertex closer than `reach` (the closest point lies on the triangle, inside every
+    /// one of those planes) and a few more near the corners, which the sub-steps' exact test
+    /// then turns down.
+    pub fn detect_on(&mut self, pool: Option<&Pool>, chains: &Chains, alive: &[usize], reach: f64) {
+        let n = chains.n;
+        let h = chains.len.iter().cloned().fold(0.0, f64::max) + 2.0 * reach;
+        self.entries.clear();
+        self.tri_entries.clear();
+        self.seg_pairs.clear();
+        self.vt_pairs.clear();
+        self.vkeys.clear();
+        fill_tangents(chains, alive, &mut self.tangents);
+        let links = chains.len.len();
+        self.seg_box
+            .resize(links, (Vector3::zeros(), Vector3::zeros()));
+        self.seg_dir.resize(links, Vector3::zeros());
+        self.seg_cell.resize(links, [0; 3]);
+        self.tri_box
+            .resize(self.tri.len(), (Vector3::zeros(), Vector3::zeros()));
+        self.tri_dir.resize(self.tri.len(), Vector3::zeros());
+        self.tri_prism.resize(self.tri.len(), Prism::default());
+        let half = Vector3::repeat(reach * 0.5);
+        let push_cells =
+            |out: &mut Vec<(u64, u32)>, lo: &Vector3<f64>, hi: &Vector3<f64>, id: u32| {
+                let (a, b) = (cell_of(lo, h), cell_of(hi, h));
+                if (b[0] - a[0] + 1) * (b[1] - a[1] + 1) * (b[2] - a[2] + 1) > 64 {
+                    return; // a degenerate, huge element: no contact rather than a flood of cells
+                }
+                for x in a[0]..=b[0] {
+                    for y in a[1]..=b[1] {
+                        for z in a[2]..=b[2] {
+                            out.push((cell_key([x, y, z]), id));
+                        }
+                    }
+                }
+            };
+        for &g in alive {
+            for i in 0..n {
+                let l = g * n + i;
+                let v = g * (n + 1) + i;
+                let (p, q) = (chains.x[v], chains.x[v + 1]);
+                let (lo, hi) = (p.inf(&q) - half, p.sup(&q) + half);
+                self.seg_box[l] = (lo, hi);
+                self.seg_cell[l] = cell_of(&lo, h);
+                let t = q - p;
+                self.seg_dir[l] = t / t.norm();
+                push_cells(&mut self.entries, &lo, &hi, l as u32);
+                let x = chains.x[v + 1];
+                self.vkeys.push((cell_key(cell_of(&x, h)), (v + 1) as u32));
+            }
+        }
+        let full = Vector3::repeat(reach);
+        for t in 0..self.tri.len() {
+            if self.broken[t] {
+                continue;
+            }
+            let tp = self.tri[t].map(|v| chains.x[v as usize]);
+            let [a, b, c] = tp;
+            let (lo, hi) = (a.inf(&b).inf(&c) - full, a.sup(&b).sup(&c) + full);
+            self.tri_box[t] = (lo, hi);
+            let mut dir = Vector3::zeros();
+            for w in self.tri[t] {
+                dir += self.tangents[w as usize];
+            }
+            self.tri_dir[t] = dir.try_normalize(1e-12).unwrap_or_else(Vector3::y);
+            self.tri_prism[t] = Prism::new(&tp);
+            push_cells(&mut self.tri_entries, &lo, &hi, t as u32);
+        }
+        self.entries.sort_unstable();
+        self.tri_entries.sort_unstable();
+        self.vkeys.sort_unstable();
+        for b in &mut self.ebox {
+            b.clear();
+        }
+        for &(_, t) in &self.tri_entries {
+            let (lo, hi) = self.tri_box[t as usize];
+            for k in 0..3 {
+                self.ebox[k].push(f32_down(lo[k]));
+                self.ebox[k + 3].push(f32_up(hi[k]));
+            }
+        }
+        if self.chunks.len() != CHUNKS {
+            self.chunks = (0..CHUNKS).map(|_| Mutex::default()).collect();
+        }
+        let this = &*self;
+        for_each_on(pool, CHUNKS, &|c| {
+            let mut guard = this.chunks[c].lock().unwrap_or_else(|e| e.into_inner());
+            let chunk = &mut *guard;
+            chunk.seg.clear();
+            chunk.vt.clear();
+            this.seg_piece(c, n, &mut chunk.seg);
+            this.vt_piece(c, chains, reach, &mut chunk.vt);
+        });
+        let mut chunks = std::mem::take(&mut self.chunks);
+        for m in &mut chunks {
+            let chunk = m.get_mut().unwrap_or_else(|e| e.into_inner());
+            self.seg_pairs.extend_from_slice(&chunk.seg);
+        }
+        // Grouped by triangle (a counting sort), so a sub-step loads and prepares each triangle
+        // once for all its vertices.
+        self.tri_start.clear();
+        self.tri_start.resize(self.tri.len() + 1, 0);
+        let mut found = 0;
+        for m in &mut chunks {
+            let chunk = m.get_mut().unwrap_or_else(|e| e.into_inner());
+            for &(_, t) in &chunk.vt {
+                self.tri_start[t as usize + 1] += 1;
+            }
+            found += chunk.vt.len();
+        }
+        for t in 0..self.tri.len() {
+            self.tri_start[t + 1] += self.tri_start[t];
+        }
+        self.tri_verts.clear();
+        self.tri_verts.resize(found, 0);
+        let mut cursor = std::mem::take(&mut self.cursor);
+        cursor.clear();
+        cursor.extend_from_slice(&self.tri_start[..self.tri.len()]);
+        for m in &mut chunks {
+            let chunk = m.get_mut().unwrap_or_else(|e| e.into_inner());
+            for &(v, t) in &chunk.vt {
+                self.tri_verts[cursor[t as usize] as usize] = v;
+                cursor[t as usize] += 1;
+            }
+        }
+        self.cursor = cursor;
+        self.chunks = chunks;
+        // Each triangle's vertices in index order, the order of a vertex-by-vertex search: the
+        // order in which a sub-step adds their forces, whatever the cells made of it.
+        for t in 0..self.tri.len() {
+            self.tri_verts[self.tri_start[t] as usize..self.tri_start[t + 1] as usize]
+                .sort_unstable();
+        }
+    }
+
+    /// Piece `c` of the segment pairs: the cells whose runs start in its share of the sorted
+    /// entries. Each pair is tested in the one cell holding the low corner of their boxes'
+    /// overlap.
+    fn seg_piece(&self, c: usize, n: usize, out: &mut Vec<(u32, u32)>) {
+        let entries = &self.entries;
+        let run_start = |i: usize| {
+            let mut i = i.min(entries.len());
+            while i > 0 && i < entries.len() && entries[i].0 == entries[i - 1].0 {
+                i += 1;
+            }
+            i
+        };
+        let len = entries.len();
+        let (mut s, end) = (
+            run_start(c * len / CHUNKS),
+            run_start((c + 1) * len / CHUNKS),
+        );
+        while s < end {
+            let key = entries[s].0;
+            let mut e = s;
+            while e < len && entries[e].0 == key {
+                e += 1;
+            }
+            for p in s..e {
+                let la = entries[p].1 as usize;
+                let (alo, ahi) = self.seg_box[la];
+                let ca = self.seg_cell[la];
+                for &(_, lb) in &entries[p + 1..e] {
+                    let lb = lb as usize;
+                    let (blo, bhi) = self.seg_box[lb];
+                    let lo = alo.sup(&blo);
+                    let hi = ahi.inf(&bhi);
+                    if lo.x > hi.x || lo.y > hi.y || lo.z > hi.z || la / n == lb / n {
+                        continue;
+                    }
+                    // The cell of the overlap's low corner, `lo = alo.sup(blo)`: the larger
+                    // of the two boxes' low cells on each axis (the cell is monotone).
+                    let cb = self.seg_cell[lb];
+                    let cell = [ca[0].max(cb[0]), ca[1].max(cb[1]), ca[2].max(cb[2])];
+                    if cell_key(cell) != key
+                        || orientation_scale(&self.seg_dir[la], &self.seg_dir[lb]) < MIN_CROSSING
+                    {
+                        continue;
+                    }
+                    out.push((la.min(lb) as u32, la.max(lb) as u32));
+                }
+            }
+            s = e;
+        }
+    }
+
+    /// Piece `c` of the vertex–triangle pairs: its share of the vertices sorted by cell. A
+    /// vertex sits in one cell; each triangle is listed in every cell its box grown by `reach`
+    /// touches, so every triangle within `reach` is listed there.
+    fn vt_piece(&self, c: usize, chains: &Chains, reach: f64, out: &mut Vec<(u32, u32)>) {
+        let n = chains.n;
+        let len = self.vkeys.len();
+        let far = reach * (1.0 + 1e-9);
+        let mut key = u64::MAX;
+        let (mut start, mut end) = (0, 0);
+        let [lx, ly, lz, hx, hy, hz] = &self.ebox;
+        let min2 = MIN_CROSSING * MIN_CROSSING;
+        for &(k, v) in &self.vkeys[c * len / CHUNKS..(c + 1) * len / CHUNKS] {
+            if k != key {
+                key = k;
+                start = self.tri_entries.partition_point(|e| e.0 < key);
+                end = start + self.tri_entries[start..].partition_point(|e| e.0 == key);
+            }
+            let v = v as usize;
+            let g = (v / (n + 1)) as u32;
+            let x = chains.x[v];
+            // Rounding to the nearest f32 keeps the order with the boxes' f32 bounds, which
+            // are rounded outwards: no vertex inside a box falls out.
+            let xf = [x.x as f32, x.y as f32, x.z as f32];
+            let hair = self.tangents[v];
+            let mut i = start;
+            while i < end {
+                // The box test of up to eight entries without a branch (a bit mask), then the
+                // other tests on the boxes that hold the vertex.
+                let m = (end - i).min(8);
+                let mut mask = 0u32;
+                for j in 0..m {
+                    let q = i + j;
+                    let inside = (xf[0] >= lx[q])
+                        & (xf[1] >= ly[q])
+                        & (xf[2] >= lz[q])
+                        & (xf[0] <= hx[q])
+                        & (xf[1] <= hy[q])
+                        & (xf[2] <= hz[q]);
+                    mask |= (inside as u32) << j;
+                }
+                while mask != 0 {
+                    let j = mask.trailing_zeros() as usize;
+                    mask &= mask - 1;
+                    let t = self.tri_entries[i + j].1 as usize;
+                    let [ga, gb] = self.tri_guides[t];
+                    if ga == g
+                        || gb == g
+                        || hair.cross(&self.tri_dir[t]).norm_squared() < min2
+                        || !self.tri_prism[t].near(&x, far)
+                    {
+                        continue;
+                    }
+                    out.push((v as u32, t as u32));
+                }
+                i += m;
+            }
+        }
+    }
+}
+
+/// The largest `f32` not above `x`.
+fn f32_down(x: f64) -> f32 {
+    let f = x as f32;
+    if f as f64 > x {
+        f.next_down()
+    } else {
+        f
+    }
+}
+
+/// The smallest `f32` not below `x`.
+fn f32_up(x: f64) -> f32 {
+    let f = x as f32;
+    if (f as f64) < x {
+        f.next_up()
+    } else {
+        f
+    }
+}
+
+/// A triangle's plane and the planes through its edges perpendicular to it, facing out: a
+/// point closer than `r` to the triangle is closer than `r` to its plane and less than `r`
+/// outside each edge plane (its closest point lies on the triangle, inside them all).
+#[derive(Debug, Clone, Copy, Default)]
+pub(super) struct Prism {
+    n: Vector3<f64>,
+    d: f64,
+    e: [Vector3<f64>; 3],
+    c: [f64; 3],
+    /// Too thin to have a trusted normal: every point passes.
+    flat: bool,
+}
+
+impl Prism {
+    pub(super) fn new(t: &[Vector3<f64>; 3]) -> Prism {
+        let (ab, ac) = (t[1] - t[0], t[2] - t[0]);
+        let cross = ab.cross(&ac);
+        let area = cross.norm();
+        if area.is_nan() || area <= 1e-6 * ab.norm() * ac.norm() {
+            return Prism {
+                flat: true,
+                ..Prism::default()
+            };
+        }
+        let n = cross / area;
+        let mut e = [Vector3::zeros(); 3];
+        let mut c = [0.0; 3];
+        for k in 0..3 {
+            let (p, q, r) = (t[k], t[(k + 1) % 3], t[(k + 2) % 3]);
+            let mut ek = (q - p).cross(&n).try_normalize(0.0).unwrap_or_default();
+            if ek.dot(&(r - p)) > 0.0 {
+                ek = -ek;
+            }
+            e[k] = ek;
+            c[k] = ek.dot(&p);
+        }
+        Prism {
+            n,
+            d: n.dot(&t[0]),
+            e,
+            c,
+            flat: false,
+        }
+    }
+
+    /// False only if `x` is at least `r` from the triangle.
+    #[inline]
+    pub(super) fn near(&self, x: &Vector3<f64>, r: f64) -> bool {
+        self.flat
+            || ((self.n.dot(x) - self.d).abs() < r
+                && self.e[0].dot(x) - self.c[0] < r
+                && self.e[1].dot(x) - self.c[1] < r
+                && self.e[2].dot(x) - self.c[2] < r)
+    }
+}

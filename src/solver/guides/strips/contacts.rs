@@ -1,0 +1,303 @@
+//! Each sub-step's contact forces of the strips' candidates (Chang, Jin, Yu 2002, §4.2, Eq. 3):
+//! a strongly damped repulsive spring scaled by the crossing, and viscous friction.
+
+use super::*;
+
+impl Strips {
+    /// Adds the contact forces of the candidates closer than `p.contact_distance` to the
+    /// chains' vertex forces; returns how many are in contact. On the calling thread.
+    pub fn apply(&mut self, chains: &mut Chains, p: &GuideParams) -> usize {
+        self.apply_on(None, chains, p)
+    }
+
+    /// [`Strips::apply`] on the threads of `pool` (the same forces, added in the same order).
+    /// Each candidate is first rejected cheaply when a bound on its distance (the triangle's
+    /// box, then its prism; the segments' bounding spheres) is already past the threshold.
+    pub fn apply_on(&mut self, pool: Option<&Pool>, chains: &mut Chains, p: &GuideParams) -> usize {
+        fill_all_tangents(chains, &mut self.tangents);
+        if self.chunks.len() != CHUNKS {
+            self.chunks = (0..CHUNKS).map(|_| Mutex::default()).collect();
+        }
+        let this = &*self;
+        let ch = &*chains;
+        for_each_on(pool, CHUNKS, &|c| {
+            let mut guard = this.chunks[c].lock().unwrap_or_else(|e| e.into_inner());
+            let chunk = &mut *guard;
+            chunk.tri_hits.clear();
+            chunk.seg_hits.clear();
+            chunk.count = 0;
+            this.tri_contacts(c, ch, p, chunk);
+            this.seg_contacts(c, ch, p, chunk);
+        });
+        // The forces, contact by contact in the order of one thread: the triangles' vertices,
+        // then the segments'.
+        let mut count = 0;
+        let mut cur = u32::MAX;
+        let mut tf = [Vector3::zeros(); 3];
+        let mut td = [0.0; 3];
+        let flush = |chains: &mut Chains, t: u32, tf: &[Vector3<f64>; 3], td: &[f64; 3]| {
+            if t != u32::MAX {
+                let tv = self.tri[t as usize];
+                for k in 0..3 {
+                    chains.f[tv[k] as usize] += tf[k];
+                    chains.damp[tv[k] as usize] += td[k];
+                }
+            }
+        };
+        for m in &self.chunks {
+            let chunk = m.lock().unwrap_or_else(|e| e.into_inner());
+            count += chunk.count;
+            for hit in &chunk.tri_hits {
+                if hit.t != cur {
+                    flush(chains, cur, &tf, &td);
+                    cur = hit.t;
+                    tf = [Vector3::zeros(); 3];
+                    td = [0.0; 3];
+                }
+                let v = hit.v as usize;
+                chains.f[v] += hit.f;
+                chains.damp[v] += hit.cd;
+                for k in 0..3 {
+                    tf[k] -= hit.f * hit.bary[k];
+                    td[k] += hit.cd * hit.bary[k];
+                }
+            }
+        }
+        flush(chains, cur, &tf, &td);
+        for m in &self.chunks {
+            let chunk = m.lock().unwrap_or_else(|e| e.into_inner());
+            for hit in &chunk.seg_hits {
+                let (va, vb, s, t, f, cd) = (
+                    hit.va as usize,
+                    hit.vb as usize,
+                    hit.s,
+                    hit.t,
+                    hit.f,
+                    hit.cd,
+                );
+                chains.f[va] += f * (1.0 - s);
+                chains.f[va + 1] += f * s;
+                chains.f[vb] -= f * (1.0 - t);
+                chains.f[vb + 1] -= f * t;
+                chains.damp[va] += cd * (1.0 - s);
+                chains.damp[va + 1] += cd * s;
+                chains.damp[vb] += cd * (1.0 - t);
+                chains.damp[vb + 1] += cd * t;
+            }
+        }
+        count
+    }
+
+    /// Piece `c` of a sub-step's vertex–triangle contacts: the triangles holding its share of
+    /// the candidates.
+    fn tri_contacts(&self, c: usize, chains: &Chains, p: &GuideParams, out: &mut Chunk) {
+        let n = chains.n;
+        let dc = p.contact_distance;
+        // The bounds are exact to rounding; a relative slack keeps every pair the exact test
+        // would accept.
+        let far = dc * (1.0 + 1e-9);
+        let tangents = &self.tangents;
+        let total = self.tri_verts.len() as u32;
+        let first = |c: usize| {
+            let k = (c * total as usize / CHUNKS) as u32;
+            self.tri_start[..self.tri.len()].partition_point(|&s| s < k)
+        };
+        for t in first(c)..first(c + 1) {
+            let (start, end) = (self.tri_start[t] as usize, self.tri_start[t + 1] as usize);
+            if start == end || self.broken[t] {
+                continue;
+            }
+            let tv = self.tri[t].map(|w| w as usize);
+            let tp = tv.map(|w| chains.x[w]);
+            let pre = TrianglePre::new(&tp);
+            let prism = Prism::new(&tp);
+            let lo = tp[0].inf(&tp[1]).inf(&tp[2]) - Vector3::repeat(far);
+            let hi = tp[0].sup(&tp[1]).sup(&tp[2]) + Vector3::repeat(far);
+            let tt = tv.map(|w| tangents[w]);
+            let tvel = tv.map(|w| chains.v[w]);
+            let tsoft = chains.soft[tv[0]]
+                .min(chains.soft[tv[1]])
+                .min(chains.soft[tv[2]]);
+            for &v in &self.tri_verts[start..end] {
+                let v = v as usize;
+                let x = chains.x[v];
+                if x.x < lo.x || x.y < lo.y || x.z < lo.z || x.x > hi.x || x.y > hi.y || x.z > hi.z
+                {
+                    continue;
+                }
+                if !prism.near(&x, far) {
+                    continue;
+                }
+                let (cp, bary) = pre.closest(&x);
+                let d = (x - cp).norm();
+                if d >= dc || d < 1e-9 {
+                    continue;
+                }
+                out.count += 1;
+                let nrm = (x - cp) / d;
+                let hair = tangents[v];
+                let mut dir = Vector3::zeros();
+                let mut vt = Vector3::zeros();
+                for k in 0..3 {
+                    dir += tt[k] * bary[k];
+                    vt += tvel[k] * bary[k];
+                }
+                let scale = orientation_scale(&hair, &dir.try_normalize(1e-12).unwrap_or(hair));
+                let m = chains.m[link_of(v, n)];
+                let soft = chains.soft[v].min(tsoft);
+                let f = contact_force(chains.v[v] - vt, nrm, d, scale, m, p) * soft;
+                let cd = damping_of(scale, m, p);
+                out.tri_hits.push(TriHit {
+                    t: t as u32,
+                    v: v as u32,
+                    f,
+                    cd,
+                    bary,
+                });
+            }
+        }
+    }
+
+    /// Piece `c` of a sub-step's segment–segment contacts: its share of the candidates.
+    fn seg_contacts(&self, c: usize, chains: &Chains, p: &GuideParams, out: &mut Chunk) {
+        let n = chains.n;
+        let dc = p.contact_distance;
+        let far = dc * (1.0 + 1e-9);
+        let len = self.seg_pairs.len();
+        for &(la, lb) in &self.seg_pairs[c * len / CHUNKS..(c + 1) * len / CHUNKS] {
+            let (la, lb) = (la as usize, lb as usize);
+            let va = (la / n) * (n + 1) + la % n;
+            let vb = (lb / n) * (n + 1) + lb % n;
+            let (a0, a1, b0, b1) = (
+                chains.x[va],
+                chains.x[va + 1],
+                chains.x[vb],
+                chains.x[vb + 1],
+            );
+            // Every point of a segment is within half its length of its midpoint.
+            let gap = ((a0 + a1) - (b0 + b1)).norm() * 0.5;
+            if gap - 0.5 * (chains.len[la] + chains.len[lb]) > far {
+                continue;
+            }
+            let (s, t) = closest_segments(&a0, &a1, &b0, &b1);
+            let pa = a0.lerp(&a1, s);
+            let pb = b0.lerp(&b1, t);
+            let d = (pa - pb).norm();
+            if d >= dc || d < 1e-9 {
+                continue;
+            }
+            out.count += 1;
+            let nrm = (pa - pb) / d;
+            let ta = (a1 - a0) / chains.len[la];
+            let tb = (b1 - b0) / chains.len[lb];
+            let rel =
+                chains.v[va].lerp(&chains.v[va + 1], s) - chains.v[vb].lerp(&chains.v[vb + 1], t);
+            let m = chains.m[la].min(chains.m[lb]);
+            let scale = orientation_scale(&ta, &tb);
+            let soft = chains.soft[va]
+                .min(chains.soft[va + 1])
+                .min(chains.soft[vb])
+                .min(chains.soft[vb + 1]);
+            let f = contact_force(rel, nrm, d, scale, m, p) * soft;
+            let cd = damping_of(scale, m, p);
+            out.seg_hits.push(SegHit {
+                va: va as u32,
+                vb: vb as u32,
+                s,
+                t,
+                f,
+                cd,
+            });
+        }
+    }
+}
+
+/// The contact force on the first element: a repulsive spring and a strong damping of the
+/// approach along `nrm`, both scaled by the orientation factor and never pulling, plus viscous
+/// friction on the tangential relative velocity `rel`.
+fn contact_force(
+    rel: Vector3<f64>,
+    nrm: Vector3<f64>,
+    d: f64,
+    scale: f64,
+    m: f64,
+    p: &GuideParams,
+) -> Vector3<f64> {
+    let vn = rel.dot(&nrm);
+    let fn_ = (scale * (p.contact_stiffness * (p.contact_distance - d) - p.contact_damping * vn))
+        .max(0.0);
+    let vt = rel - nrm * vn;
+    (nrm * fn_ - vt * p.contact_friction) * m
+}
+
+/// The damping coefficient of a contact's force (normal damping and tangential friction),
+/// N·s/m, for the implicit damping of [`Chains::integrate`].
+fn damping_of(scale: f64, m: f64, p: &GuideParams) -> f64 {
+    (scale * p.contact_damping + p.contact_friction) * m
+}
+
+/// A triangle's corners and edges from its first corner, for many closest-point queries.
+pub(super) struct TrianglePre {
+    a: Vector3<f64>,
+    b: Vector3<f64>,
+    c: Vector3<f64>,
+    ab: Vector3<f64>,
+    ac: Vector3<f64>,
+}
+
+impl TrianglePre {
+    #[inline]
+    pub(super) fn new(t: &[Vector3<f64>; 3]) -> TrianglePre {
+        let (a, b, c) = (t[0], t[1], t[2]);
+        TrianglePre {
+            a,
+            b,
+            c,
+            ab: b - a,
+            ac: c - a,
+        }
+    }
+
+    /// [`closest_on_triangle`].
+    #[inline]
+    pub(super) fn closest(&self, p: &Vector3<f64>) -> (Vector3<f64>, [f64; 3]) {
+        let TrianglePre { a, b, c, ab, ac } = *self;
+        let ap = p - a;
+        let d1 = ab.dot(&ap);
+        let d2 = ac.dot(&ap);
+        if d1 <= 0.0 && d2 <= 0.0 {
+            return (a, [1.0, 0.0, 0.0]);
+        }
+        let bp = p - b;
+        let d3 = ab.dot(&bp);
+        let d4 = ac.dot(&bp);
+        if d3 >= 0.0 && d4 <= d3 {
+            return (b, [0.0, 1.0, 0.0]);
+        }
+        let vc = d1 * d4 - d3 * d2;
+        if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
+            let v = d1 / (d1 - d3);
+            return (a + ab * v, [1.0 - v, v, 0.0]);
+        }
+        let cp = p - c;
+        let d5 = ab.dot(&cp);
+        let d6 = ac.dot(&cp);
+        if d6 >= 0.0 && d5 <= d6 {
+            return (c, [0.0, 0.0, 1.0]);
+        }
+        let vb = d5 * d2 - d1 * d6;
+        if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
+            let w = d2 / (d2 - d6);
+            return (a + ac * w, [1.0 - w, 0.0, w]);
+        }
+        let va = d3 * d6 - d5 * d4;
+        if va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0 {
+            let w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
+            return (b + (c - b) * w, [0.0, 1.0 - w, w]);
+        }
+        let denom = 1.0 / (va + vb + vc);
+        let v = vb * denom;
+        let w = vc * denom;
+        (a + ab * v + ac * w, [1.0 - v - w, v, w])
+    }
+}

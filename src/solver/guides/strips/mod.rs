@@ -1,0 +1,340 @@
+//! Hair–hair collision through auxiliary triangle strips (Chang, Jin, Yu 2002, §4.2).
+//!
+//! A strip joins two guides with nearby roots, corresponding vertices joined, and stands for
+//! the dense hair between them. Segment–segment and vertex–triangle pairs closer than a
+//! threshold (a guide stands for a cluster with a thickness) get a strongly damped repulsive
+//! spring, scaled by how much the hair crosses the other element (Eq. 3: zero when aligned,
+//! full when perpendicular), and viscous friction on their tangential relative motion. Forces
+//! on a triangle go to its vertices by barycentric weights. A triangle stretched wider than
+//! `strip_break` times its rest width is broken while it stays so (reversible, unlike links).
+//!
+//! The broad phase is a uniform grid held as a sorted list of (cell, element) pairs, rebuilt
+//! once per step into reused buffers; candidate pairs found within twice the threshold are
+//! re-evaluated at every sub-step.
+//!
+//! Both the broad phase and a sub-step's contacts are cut into [`CHUNKS`] fixed pieces of work
+//! that the threads of a [`Pool`] take in any order; each piece writes only its own lists, and
+//! the lists are joined (candidates) or their forces added (contacts) piece by piece in order
+//! afterwards, so the result is the same bit for bit on one thread or two, whichever thread
+//! took which piece.
+//!
+//! Files: `mod.rs` (the strips, their triangles and buffers, tangents, closest points),
+//! `broad.rs` (the broad phase: grid, boxes, the triangle's prism test), `contacts.rs` (each
+//! sub-step's contact forces), `tests.rs`.
+
+use std::sync::Mutex;
+
+use nalgebra::Vector3;
+
+use crate::par::{for_each_on, Pool};
+
+use super::chain::Chains;
+use super::params::{GuideParams, StripLayout};
+
+mod broad;
+mod contacts;
+#[cfg(test)]
+mod tests;
+
+use broad::Prism;
+use contacts::TrianglePre;
+
+/// The orientation factor of Eq. 3 for hair direction `a` against the other element's hair
+/// direction `b` (both unit): `|a × b|`, the sine of their angle: 0 aligned, 1 perpendicular.
+pub fn orientation_scale(a: &Vector3<f64>, b: &Vector3<f64>) -> f64 {
+    a.cross(b).norm().min(1.0)
+}
+
+/// Guide pairs that get a strip, from their rest roots (§4.2, Fig. 3). `roots`: (guide,
+/// root). Horizontal: each guide to its nearest neighbour counter-clockwise about the
+/// vertical through `center` whose root is no more than half as far vertically as
+/// horizontally. Grid: each guide to its nearest neighbour along +x and along +z.
+pub fn strip_pairs(
+    roots: &[(usize, Vector3<f64>)],
+    layout: StripLayout,
+    max_dist: f64,
+    center: &Vector3<f64>,
+) -> Vec<(u32, u32)> {
+    let mut out = Vec::new();
+    let nearest =
+        |g: usize, r: &Vector3<f64>, ok: &dyn Fn(&Vector3<f64>, &Vector3<f64>) -> bool| {
+            let mut best: Option<(f64, usize)> = None;
+            for &(j, rj) in roots {
+                let d = (rj - r).norm();
+                if j == g || d > max_dist || !ok(r, &rj) {
+                    continue;
+                }
+                if best.is_none_or(|(bd, bj)| (d, j) < (bd, bj)) {
+                    best = Some((d, j));
+                }
+            }
+            best.map(|(_, j)| j)
+        };
+    for &(g, r) in roots {
+        match layout {
+            StripLayout::Horizontal => {
+                let ok = |a: &Vector3<f64>, b: &Vector3<f64>| {
+                    let d = b - a;
+                    let horiz = (d.x * d.x + d.z * d.z).sqrt();
+                    let side = (a - center).cross(&(b - center)).y;
+                    d.y.abs() <= 0.5 * horiz && side > 0.0
+                };
+                if let Some(j) = nearest(g, &r, &ok) {
+                    out.push((g as u32, j as u32));
+                }
+            }
+            StripLayout::Grid => {
+                let along_x = |a: &Vector3<f64>, b: &Vector3<f64>| (b - a).x > 0.7 * (b - a).norm();
+                let along_z = |a: &Vector3<f64>, b: &Vector3<f64>| (b - a).z > 0.7 * (b - a).norm();
+                if let Some(j) = nearest(g, &r, &along_x) {
+                    out.push((g as u32, j as u32));
+                }
+                if let Some(j) = nearest(g, &r, &along_z) {
+                    out.push((g as u32, j as u32));
+                }
+            }
+        }
+    }
+    out
+}
+
+/// Pieces the broad phase and the contacts are cut into for the pool's threads: enough that a
+/// thread finding the other core busy takes the pieces the other would have.
+pub const CHUNKS: usize = 8;
+
+/// A vertex–triangle contact of a sub-step, kept until its forces are added in order.
+#[derive(Debug, Clone, Copy)]
+struct TriHit {
+    t: u32,
+    v: u32,
+    f: Vector3<f64>,
+    cd: f64,
+    bary: [f64; 3],
+}
+
+/// A segment–segment contact of a sub-step: the first vertices of both links, the closest
+/// points' parameters, the force on the first link and the damping coefficient.
+#[derive(Debug, Clone, Copy)]
+struct SegHit {
+    va: u32,
+    vb: u32,
+    s: f64,
+    t: f64,
+    f: Vector3<f64>,
+    cd: f64,
+}
+
+/// What one piece of work found.
+#[derive(Debug, Default)]
+struct Chunk {
+    seg: Vec<(u32, u32)>,
+    vt: Vec<(u32, u32)>,
+    tri_hits: Vec<TriHit>,
+    seg_hits: Vec<SegHit>,
+    count: usize,
+}
+
+/// The strips' triangles and the contact machinery.
+#[derive(Debug, Default)]
+pub struct Strips {
+    /// Guide pairs joined by a strip.
+    pub pairs: Vec<(u32, u32)>,
+    /// Per triangle: its three vertices (chain vertex indices).
+    pub tri: Vec<[u32; 3]>,
+    /// Per triangle: the two vertices (one per guide) whose distance is its width.
+    pub width_edge: Vec<[u32; 2]>,
+    /// Per triangle: rest width, m.
+    pub rest_width: Vec<f64>,
+    /// Per triangle: broken at the last check.
+    pub broken: Vec<bool>,
+    entries: Vec<(u64, u32)>,
+    tri_entries: Vec<(u64, u32)>,
+    /// Candidate segment–segment pairs (links, lower first).
+    seg_pairs: Vec<(u32, u32)>,
+    /// Candidate vertex–triangle pairs as found (vertex-major), then grouped by triangle:
+    /// the vertices of triangle `t` are `tri_verts[tri_start[t]..tri_start[t + 1]]`.
+    vt_pairs: Vec<(u32, u32)>,
+    tri_start: Vec<u32>,
+    tri_verts: Vec<u32>,
+    cursor: Vec<u32>,
+    /// Per chain vertex: hair direction ([`tangent`]), refreshed by `detect` and `apply`.
+    tangents: Vec<Vector3<f64>>,
+    /// Per link: box grown by half the reach, its low corner's cell, and unit direction
+    /// (`detect`).
+    seg_box: Vec<(Vector3<f64>, Vector3<f64>)>,
+    seg_cell: Vec<[i64; 3]>,
+    seg_dir: Vec<Vector3<f64>>,
+    /// Per triangle: box grown by the reach, and hair direction (`detect`).
+    tri_box: Vec<(Vector3<f64>, Vector3<f64>)>,
+    tri_dir: Vec<Vector3<f64>>,
+    /// Per triangle: its slab and edge planes (`detect`).
+    tri_prism: Vec<Prism>,
+    /// Per triangle: the guides of its two sides.
+    tri_guides: Vec<[u32; 2]>,
+    /// Per entry of `tri_entries`: its triangle's box grown by the reach, as `f32` rounded
+    /// outwards (low x, y, z, high x, y, z), side by side for a vertex to test eight at once.
+    ebox: [Vec<f32>; 6],
+    /// The alive guides' vertices (roots left out) by grid cell (`detect`).
+    vkeys: Vec<(u64, u32)>,
+    /// The pieces' findings.
+    chunks: Vec<Mutex<Chunk>>,
+}
+
+const BIAS: i64 = 1 << 20;
+
+/// Pairs more aligned than this orientation factor (about 11°) are not candidates: their
+/// repulsion would be almost zero (Eq. 3), and hair lying along hair is what the strips'
+/// interpolation already stands for. This keeps the contact count to the crossings.
+pub const MIN_CROSSING: f64 = 0.2;
+
+fn cell_key(c: [i64; 3]) -> u64 {
+    let m = (1u64 << 21) - 1;
+    (((c[0] + BIAS) as u64 & m) << 42)
+        | (((c[1] + BIAS) as u64 & m) << 21)
+        | ((c[2] + BIAS) as u64 & m)
+}
+
+fn cell_of(p: &Vector3<f64>, h: f64) -> [i64; 3] {
+    [floor(p.x / h), floor(p.y / h), floor(p.z / h)]
+}
+
+/// `t.floor() as i64` (saturating, NaN to 0) without a call into the maths library, which a
+/// baseline x86-64 build makes of `floor`.
+#[inline]
+fn floor(t: f64) -> i64 {
+    let i = t as i64;
+    if (i as f64) > t {
+        i.saturating_sub(1)
+    } else {
+        i
+    }
+}
+
+impl Strips {
+    /// Rebuilds the triangles of `pairs` (each strip: two triangles per segment); rest widths
+    /// from `rest` (chain vertex → rest position), at least `min_width`.
+    pub fn rebuild(
+        &mut self,
+        n: usize,
+        pairs: &[(u32, u32)],
+        rest: &[Vector3<f64>],
+        min_width: f64,
+    ) {
+        self.pairs.clear();
+        self.pairs.extend_from_slice(pairs);
+        self.tri.clear();
+        self.width_edge.clear();
+        self.rest_width.clear();
+        self.broken.clear();
+        self.tri_guides.clear();
+        for &(a, b) in pairs {
+            let (va, vb) = (a as usize * (n + 1), b as usize * (n + 1));
+            for i in 0..n {
+                let (a0, a1, b0, b1) = (va + i, va + i + 1, vb + i, vb + i + 1);
+                for (t, e) in [([a0, b0, a1], [a0, b0]), ([b0, b1, a1], [b1, a1])] {
+                    self.tri.push(t.map(|v| v as u32));
+                    self.width_edge.push(e.map(|v| v as u32));
+                    self.rest_width
+                        .push((rest[e[0]] - rest[e[1]]).norm().max(min_width));
+                    self.broken.push(false);
+                    self.tri_guides.push([a, b]);
+                }
+            }
+        }
+    }
+
+    /// Marks triangles wider than `ratio` times their rest width as broken, the others as
+    /// intact (§4.2: reversible). Returns the number broken.
+    pub fn update_broken(&mut self, chains: &Chains, ratio: f64) -> usize {
+        let mut count = 0;
+        for t in 0..self.tri.len() {
+            let [a, b] = self.width_edge[t];
+            let w = (chains.x[a as usize] - chains.x[b as usize]).norm();
+            self.broken[t] = w > ratio * self.rest_width[t];
+            count += self.broken[t] as usize;
+        }
+        count
+    }
+
+    /// Number of candidate pairs of the last broad phase.
+    pub fn candidates(&self) -> usize {
+        self.seg_pairs.len() + self.tri_verts.len()
+    }
+
+    /// Bytes held by the reused buffers.
+    pub fn reserved_bytes(&self) -> usize {
+        (self.entries.capacity() + self.tri_entries.capacity()) * 16
+            + (self.seg_pairs.capacity() + self.vt_pairs.capacity()) * 8
+            + (self.tri_start.capacity() + self.tri_verts.capacity() + self.cursor.capacity()) * 4
+            + self.tangents.capacity() * 24
+            + (self.seg_box.capacity() + self.tri_box.capacity()) * 48
+            + self.seg_cell.capacity() * 24
+            + (self.seg_dir.capacity() + self.tri_dir.capacity()) * 24
+            + self.tri_prism.capacity() * std::mem::size_of::<Prism>()
+            + self.tri_guides.capacity() * 8
+            + self.vkeys.capacity() * 16
+            + self.ebox.iter().map(|b| b.capacity() * 4).sum::<usize>()
+            + self
+                .chunks
+                .iter()
+                .map(|m| {
+                    let c = m.lock().unwrap_or_else(|e| e.into_inner());
+                    (c.seg.capacity() + c.vt.capacity()) * 8
+                        + c.tri_hits.capacity() * std::mem::size_of::<TriHit>()
+                        + c.seg_hits.capacity() * std::mem::size_of::<SegHit>()
+                })
+                .sum::<usize>()
+    }
+}
+
+/// The link whose end is vertex `v` (the root's own link for a root).
+fn link_of(v: usize, n: usize) -> usize {
+    let g = v / (n + 1);
+    let i = v % (n + 1);
+    g * n + i.saturating_sub(1).min(n - 1)
+}
+
+/// [`tangent`] of every vertex of the guides in `alive` into `out` (sized to the chains).
+fn fill_tangents(chains: &Chains, alive: &[usize], out: &mut Vec<Vector3<f64>>) {
+    out.resize(chains.x.len(), Vector3::y());
+    for &g in alive {
+        for v in chains.verts(g) {
+            out[v] = tangent(chains, v);
+        }
+    }
+}
+
+/// [`tangent`] of every vertex of the chains into `out`: the contacts of a sub-step only touch
+/// alive guides, and a dead slot's vertices cost little.
+fn fill_all_tangents(chains: &Chains, out: &mut Vec<Vector3<f64>>) {
+    out.resize(chains.x.len(), Vector3::y());
+    for (v, o) in out.iter_mut().enumerate() {
+        *o = tangent(chains, v);
+    }
+}
+
+/// Hair direction at vertex `v`: its incoming segment (the first segment at the root).
+fn tangent(chains: &Chains, v: usize) -> Vector3<f64> {
+    let n = chains.n;
+    let i = v % (n + 1);
+    let (a, b) = if i == 0 { (v, v + 1) } else { (v - 1, v) };
+    (chains.x[b] - chains.x[a])
+        .try_normalize(1e-12)
+        .unwrap_or_else(Vector3::y)
+}
+
+/// Parameters `(s, t)` of the closest points of segments `p1p2` and `q1q2`: the AWT
+/// collider's exact test (Ericson, *Real-Time Collision Detection*, §5.1.9), shared.
+pub fn closest_segments(
+    p1: &Vector3<f64>,
+    p2: &Vector3<f64>,
+    q1: &Vector3<f64>,
+    q2: &Vector3<f64>,
+) -> (f64, f64) {
+    crate::solver::common::closest_segment_params(p1, p2, q1, q2)
+}
+
+/// The point of triangle `t` closest to `p`, and its barycentric weights (Ericson, §5.1.5).
+pub fn closest_on_triangle(p: &Vector3<f64>, t: &[Vector3<f64>; 3]) -> (Vector3<f64>, [f64; 3]) {
+    TrianglePre::new(t).closest(p)
+}

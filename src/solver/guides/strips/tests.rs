@@ -1,0 +1,202 @@
+//! Tests of the strips: every pair within the reach found, the prism test, the floor, one
+//! thread or two.
+
+use super::*;
+
+/// A small deterministic generator (the tests need no statistics, only variety).
+struct Lcg(u64);
+
+impl Lcg {
+    fn unit(&mut self) -> f64 {
+        self.0 = self
+            .0
+            .wrapping_mul(6_364_136_223_846_793_005)
+            .wrapping_add(1_442_695_040_888_963_407);
+        (self.0 >> 11) as f64 / (1u64 << 53) as f64
+    }
+    fn vec(&mut self, scale: f64) -> Vector3<f64> {
+        Vector3::new(self.unit(), self.unit(), self.unit()).map(|c| (c - 0.5) * scale)
+    }
+}
+
+/// `guides` random zig-zag guides of `n` links crowded in a few centimetres, every pair of
+/// consecutive guides joined by a strip, moving at random velocities.
+fn tangle(seed: u64, guides: usize, n: usize) -> (Chains, Strips) {
+    let mut rng = Lcg(seed);
+    let mut c = Chains::new(n, guides);
+    for g in 0..guides {
+        let mut p = rng.vec(0.04);
+        let mut pts = vec![p];
+        for _ in 0..n {
+            p += rng.vec(0.02);
+            pts.push(p);
+        }
+        c.init_guide(g, &pts, 0.01, (0.0, 1.0, 0.0));
+        for (i, q) in pts.iter().enumerate() {
+            c.x[g * (n + 1) + i] = *q;
+            c.v[g * (n + 1) + i] = rng.vec(1.0);
+        }
+    }
+    let pairs: Vec<(u32, u32)> = (1..guides as u32).map(|g| (g - 1, g)).collect();
+    let mut s = Strips::default();
+    s.rebuild(n, &pairs, &c.x.clone(), 0.001);
+    (c, s)
+}
+
+/// The vertex–triangle candidates of the last broad phase, as (vertex, triangle).
+fn vt_set(s: &Strips) -> std::collections::BTreeSet<(u32, u32)> {
+    let mut out = std::collections::BTreeSet::new();
+    for t in 0..s.tri.len() {
+        for &v in &s.tri_verts[s.tri_start[t] as usize..s.tri_start[t + 1] as usize] {
+            out.insert((v, t as u32));
+        }
+    }
+    out
+}
+
+#[test]
+fn floor_is_the_library_floor() {
+    for t in [
+        0.0,
+        -0.0,
+        0.5,
+        -0.5,
+        1.0,
+        -1.0,
+        2.999,
+        -2.999,
+        1e300,
+        -1e300,
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+        f64::NAN,
+        4.5e15,
+        -4.5e15,
+    ] {
+        assert_eq!(floor(t), t.floor() as i64, "{t}");
+    }
+    let mut rng = Lcg(3);
+    for _ in 0..10_000 {
+        let t = (rng.unit() - 0.5) * 100.0;
+        assert_eq!(floor(t), t.floor() as i64, "{t}");
+    }
+}
+
+#[test]
+fn prism_keeps_every_point_closer_than_the_reach() {
+    let mut rng = Lcg(7);
+    let mut rejected = 0;
+    for _ in 0..20_000 {
+        let t = [rng.vec(0.03), rng.vec(0.03), rng.vec(0.03)];
+        let x = rng.vec(0.06);
+        let r = 0.002 + 0.01 * rng.unit();
+        let (cp, _) = closest_on_triangle(&x, &t);
+        let near = Prism::new(&t).near(&x, r);
+        if (x - cp).norm() < r {
+            assert!(near, "{x:?} is {} from {t:?}, reach {r}", (x - cp).norm());
+        }
+        rejected += !near as usize;
+    }
+    // It is a filter: most random points are turned down.
+    assert!(rejected > 10_000, "{rejected}");
+    // A flat (collinear) triangle lets every point through to the exact test.
+    let line = [Vector3::zeros(), Vector3::x(), Vector3::x() * 2.0];
+    assert!(Prism::new(&line).near(&Vector3::y(), 1e-3));
+}
+
+/// The broad phase keeps every vertex–triangle pair closer than the reach that the
+/// contacts could need (vertex off the triangle's guides, crossing it), and every crossing
+/// segment pair closer than the reach, whatever the grid makes of them.
+#[test]
+fn broad_phase_finds_every_pair_within_the_reach() {
+    for seed in 1..6 {
+        let (c, mut s) = tangle(seed, 12, 6);
+        let alive: Vec<usize> = (0..12).collect();
+        for reach in [0.002, 0.006, 0.012, 0.03] {
+            s.detect(&c, &alive, reach);
+            let found = vt_set(&s);
+            let n = c.n;
+            let mut tangents = Vec::new();
+            fill_all_tangents(&c, &mut tangents);
+            let mut exact = 0;
+            for v in 0..c.x.len() {
+                if v % (n + 1) == 0 {
+                    continue;
+                }
+                for (t, tv) in s.tri.iter().enumerate() {
+                    let tp = tv.map(|w| c.x[w as usize]);
+                    let (cp, _) = closest_on_triangle(&c.x[v], &tp);
+                    let dir = tv
+                        .iter()
+                        .map(|&w| tangents[w as usize])
+                        .sum::<Vector3<f64>>();
+                    let dir = dir.normalize();
+                    let own = tv.iter().any(|&w| w as usize / (n + 1) == v / (n + 1));
+                    let crossing = tangents[v].cross(&dir).norm() >= MIN_CROSSING * 1.001;
+                    if (c.x[v] - cp).norm() < reach && !own && crossing {
+                        exact += 1;
+                        assert!(
+                            found.contains(&(v as u32, t as u32)),
+                            "seed {seed} reach {reach}: vertex {v} triangle {t} missed"
+                        );
+                    }
+                }
+            }
+            if reach >= 0.012 {
+                assert!(exact > 20, "seed {seed} reach {reach}: only {exact} pairs");
+            }
+            let segs: std::collections::BTreeSet<_> = s.seg_pairs.iter().copied().collect();
+            for la in 0..c.len.len() {
+                for lb in la + 1..c.len.len() {
+                    if la / n == lb / n {
+                        continue;
+                    }
+                    let va = la / n * (n + 1) + la % n;
+                    let vb = lb / n * (n + 1) + lb % n;
+                    let (a0, a1, b0, b1) = (c.x[va], c.x[va + 1], c.x[vb], c.x[vb + 1]);
+                    let (p, q) = closest_segments(&a0, &a1, &b0, &b1);
+                    let d = (a0.lerp(&a1, p) - b0.lerp(&b1, q)).norm();
+                    let cross = orientation_scale(&(a1 - a0).normalize(), &(b1 - b0).normalize());
+                    if d < reach && cross >= MIN_CROSSING * 1.001 {
+                        assert!(
+                            segs.contains(&(la as u32, lb as u32)),
+                            "seed {seed}: {la} {lb}"
+                        );
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// On a pool of two threads the broad phase lists the same candidates in the same order,
+/// and a sub-step adds the same forces, bit for bit, as on the calling thread alone.
+#[test]
+fn two_threads_give_the_same_candidates_and_forces() {
+    let pool = Pool::new(2).unwrap();
+    let p = GuideParams {
+        contact_distance: 0.008,
+        ..GuideParams::default()
+    };
+    for seed in 1..4 {
+        let (c, mut one) = tangle(seed, 16, 8);
+        let (_, mut two) = tangle(seed, 16, 8);
+        let alive: Vec<usize> = (0..16).collect();
+        one.detect_on(None, &c, &alive, 2.0 * p.contact_distance);
+        two.detect_on(Some(&pool), &c, &alive, 2.0 * p.contact_distance);
+        assert_eq!(one.seg_pairs, two.seg_pairs);
+        assert_eq!(one.tri_start, two.tri_start);
+        assert_eq!(one.tri_verts, two.tri_verts);
+        let (mut ca, mut cb) = (c.clone(), c.clone());
+        let na = one.apply_on(None, &mut ca, &p);
+        let nb = two.apply_on(Some(&pool), &mut cb, &p);
+        assert_eq!(na, nb);
+        assert!(na > 10, "seed {seed}: {na} contacts");
+        let bits = |c: &Chains| {
+            let f = c.f.iter().flat_map(|v| v.iter().map(|x| x.to_bits()));
+            f.chain(c.damp.iter().map(|x| x.to_bits()))
+                .collect::<Vec<u64>>()
+        };
+        assert_eq!(bits(&ca), bits(&cb), "seed {seed}");
+    }
+}
