@@ -135,28 +135,8 @@ impl Tunable {
 
     /// Whether `v` may be set with `t` in force; the error is the message a user reads.
     pub fn check(&self, t: &Tuning, v: f64) -> Result<(), String> {
-        if !v.is_finite() {
-            return Err(format!(
-                "{} ({}): `{v}` is not a number",
-                self.label, self.name
-            ));
-        }
-        if !(self.min..=self.max).contains(&v) {
-            return Err(format!(
-                "{} {v} refused: it must be between {} and {} {}",
-                self.label, self.min, self.max, self.unit
-            ));
-        }
-        if let Some(below) = self.below {
-            let (limit, why) = below(t);
-            if v >= limit {
-                return Err(format!(
-                    "{} {v} refused: it must stay below {limit:.4} {}: {why}",
-                    self.label, self.unit
-                ));
-            }
-        }
-        Ok(())
+        // One set of rules: the page checks against the view it was shown.
+        self.view(t).check(v)
     }
 
     /// Checks `v` and sets it in `t`; returns the value it replaced.
@@ -222,8 +202,8 @@ pub struct TunableView {
 }
 
 impl TunableView {
-    /// Whether the page may set `v` (the same rules as [`Tunable::check`], from what the page
-    /// was shown).
+    /// Whether `v` may be set: inside the range, and below the bound from the other values in
+    /// force. [`Tunable::check`] is this on the view of the values in force.
     pub fn check(&self, v: f64) -> Result<(), String> {
         if !v.is_finite() {
             return Err(format!("{}: `{v}` is not a number", self.label));
