@@ -84,6 +84,51 @@ fn inspect_json_on_the_paper_styles() {
     }
 }
 
+/// `inspect --coverage` prints one line per view, and those four percentages are the only
+/// numbers followed by `%`; `--json` gives the same numbers; `--images` writes the four maps.
+#[test]
+fn inspect_coverage_prints_four_views() {
+    let dir = tempfile::tempdir().unwrap();
+    let imgs = dir.path().join("maps");
+    let (code, out, err) = wisptree(&[
+        "inspect",
+        "--coverage",
+        "short",
+        "--size",
+        "160",
+        "--images",
+        imgs.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let percents: Vec<(String, f64)> = out
+        .lines()
+        .filter(|l| l.contains('%'))
+        .map(|l| {
+            let w: Vec<&str> = l.split_whitespace().collect();
+            assert_eq!(w.len(), 3, "{l}");
+            assert_eq!(w[2], "%", "{l}");
+            (w[0].to_string(), w[1].parse().unwrap())
+        })
+        .collect();
+    let views: Vec<&str> = percents.iter().map(|(v, _)| v.as_str()).collect();
+    assert_eq!(views, ["top", "behind", "left", "right"], "{out}");
+    assert_eq!(out.matches('%').count(), 4, "{out}");
+    for (v, p) in &percents {
+        assert!((0.0..=100.0).contains(p) && *p > 20.0, "{v} {p}");
+        assert!(imgs.join(format!("coverage_{v}.png")).is_file());
+    }
+    let (code, json, err) =
+        wisptree(&["inspect", "--coverage", "short", "--size", "160", "--json"]);
+    assert_eq!(code, 0, "{err}");
+    let v: serde_json::Value = serde_json::from_str(&json).unwrap();
+    for (k, (_, p)) in percents.iter().enumerate() {
+        let j = v[k]["hidden_percent"].as_f64().unwrap();
+        assert!((j - p).abs() < 0.051, "{j} vs {p}");
+    }
+    let (code, _, err) = wisptree(&["inspect", "short", "--images", "x"]);
+    assert_eq!(code, 2, "{err}");
+}
+
 /// Each case: (file name, text or None for a missing file, what the message must contain).
 #[test]
 fn bad_styles_exit_2_with_file_position_and_field() {

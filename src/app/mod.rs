@@ -18,6 +18,7 @@
 //! ```
 
 mod console;
+pub mod coverage;
 pub mod experiment;
 pub mod export;
 pub mod keys;

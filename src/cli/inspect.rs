@@ -12,6 +12,17 @@ pub struct InspectArgs {
     /// Print one JSON object instead of a table.
     #[arg(long)]
     pub json: bool,
+    /// How much of the scalp the hair at rest hides, seen from above, behind, left and right:
+    /// renders each view with the scalp alone as the body and prints the percentage of
+    /// hair-bearing scalp pixels (within 10 mm of a root) that the hair hides, one line per view
+    #[arg(long)]
+    pub coverage: bool,
+    /// With --coverage: side of the square images, pixels (64 to 2048)
+    #[arg(long, default_value_t = 400, value_parser = clap::value_parser!(u32).range(64..=2048))]
+    pub size: u32,
+    /// With --coverage: also write each view's render into this folder (`coverage_top.png`, …)
+    #[arg(long, value_name = "DIR")]
+    pub images: Option<std::path::PathBuf>,
 }
 
 /// Summary numbers of a model, as `inspect --json` prints them.
@@ -64,6 +75,12 @@ pub fn inspect(a: &InspectArgs) -> anyhow::Result<()> {
     for w in crate::scene::warnings(&model) {
         eprintln!("warning: {w}");
     }
+    if a.coverage {
+        return coverage(a, &loaded, &model);
+    }
+    if a.images.is_some() {
+        return Err(crate::error::BadInput("--images needs --coverage".into()).into());
+    }
     let s = summarize(&loaded, &model);
     if a.json {
         println!("{}", serde_json::to_string_pretty(&s)?);
@@ -87,5 +104,31 @@ pub fn inspect(a: &InspectArgs) -> anyhow::Result<()> {
     println!("K            {} cross-sections per GC", s.cross_sections);
     println!("longest      {:.3} m", s.max_strand_length_m);
     println!("link         {}", s.link);
+    Ok(())
+}
+
+/// `wisptree inspect --coverage`.
+fn coverage(a: &InspectArgs, loaded: &style::LoadedStyle, model: &HairModel) -> anyhow::Result<()> {
+    if let Some(dir) = &a.images {
+        std::fs::create_dir_all(dir).map_err(|e| {
+            crate::error::BadInput(format!(
+                "--images {}: cannot create the folder: {e}",
+                dir.display()
+            ))
+        })?;
+    }
+    let views =
+        crate::app::coverage::of_model(model, &loaded.style.render, a.size, a.images.as_deref())?;
+    if a.json {
+        println!("{}", serde_json::to_string_pretty(&views)?);
+        return Ok(());
+    }
+    println!(
+        "scalp hidden by the hair at rest ({}):",
+        loaded.path.display()
+    );
+    for v in &views {
+        println!("{:<7} {:5.1} %", v.view, v.hidden_percent);
+    }
     Ok(())
 }
