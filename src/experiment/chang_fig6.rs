@@ -1,6 +1,7 @@
 //! Chang, Jin, Yu 2002, "A practical model for hair mutual interactions", §7.2 and Fig. 6: a
 //! braid of two sets of guide hairs unfolding under gravity, with and without hair–hair
-//! collision (§4.2). The scene is `scenes/chang_fig6.ron` (compiled in).
+//! collision (§4.2). The scene is `scenes/chang_fig6.ron` (compiled in); it styles the braid,
+//! which is where the straight hair starts (see [`straighten_rest`]).
 //!
 //! Two numbers, both computed from the simulation:
 //! * `crossings`: how often a segment of one set passes through a segment of the other (see
@@ -9,15 +10,16 @@
 //!   `end_turns`: how far its free end turned about the vertical meanwhile (the direction from
 //!   set b's mean tip to set a's, unwrapped from step to step). With collision the sets cannot
 //!   pass through each other, so the twist can only go by the end turning, the paper's "spiral
-//!   motion": `twist_turns ≈ 3 + end_turns`. Without it the twist goes to about 0 by the
+//!   motion": `twist_turns ≈ 3 + end_turns`; it unfolds fully (`twist_turns` near 0, the end
+//!   turning nearly −3 times). Without it the twist goes to about 0 by the
 //!   strands passing through, whatever the end does.
 
-use nalgebra::Vector3;
+use nalgebra::{Rotation3, UnitQuaternion, Vector3};
 use serde_json::{json, Map};
 
 use super::chang::{guide_wisps, load_scene, scene_solver};
 use super::{ExperimentDef, ExperimentOptions, ExperimentRun, FrameSink};
-use crate::solver::guides::chain::Chains;
+use crate::solver::guides::chain::{min_rotation, Chains};
 use crate::solver::guides::strips::{closest_segments, MIN_CROSSING};
 use crate::solver::guides::GuideSolver;
 use crate::solver::Solver;
@@ -38,7 +40,8 @@ pub static CHANG_FIG6: ExperimentDef = ExperimentDef {
                   collision and about 0 with it (pairs more aligned than the strips' 11.5° \
                   are not counted: the model gives them no repulsion); with collision the \
                   braid untwists only by its free end turning, twist_turns = 3 + end_turns \
-                  (the spiral), without it twist_turns falls to about 0 by passing through",
+                  (the spiral), and it unfolds fully (|twist_turns| < 0.25, end_turns about \
+                  -3); without it twist_turns falls to about 0 by passing through",
     run: run_fig6,
 };
 
@@ -181,6 +184,47 @@ fn twist(s: &GuideSolver, wisps: &[u32]) -> f64 {
     sum / std::f64::consts::TAU
 }
 
+/// Makes straight hair the actuators' rest shape, keeping the braided configuration the scene
+/// styles: the braid becomes where the hair starts, not the shape it springs back to.
+///
+/// Chang, Jin, Yu 2002, §3.2: a joint's actuator pulls towards its resting angles, the hair's
+/// natural shape (non-zero only for curly hair); §7.2 lets "a simple braided hair model"
+/// "unfold under gravity". Straight hair braided and let go has straight rest angles; a braid
+/// that *is* the rest shape would be held braided by its own actuators (with the styled
+/// twist as the rest shape the braid stops with about 1 of its 3 turns left). The links and
+/// strips (built at construction, on the braid) are kept: they hold the sets together as
+/// braided. Each joint's new rest rotation is its current one turned by the smallest rotation
+/// that makes the chain straight below its root (link 0 pointing down, every other link
+/// continuing its parent), so the joint rotations that keep the pose are pure swings (no
+/// twist about the segment, which the joints do not have, §3.1).
+fn straighten_rest(s: &mut GuideSolver) {
+    let n = s.guide_params().segments;
+    let down = -Vector3::y();
+    for g in s.alive().to_vec() {
+        let c = &mut s.chains;
+        for i in 0..n {
+            let l = g * n + i;
+            let cur = c.rot[l];
+            let parent = if i == 0 {
+                cur * (c.r0[l] * c.q[l].to_rotation_matrix().into_inner()).transpose()
+            } else {
+                c.rot[l - 1]
+            };
+            let target = if i == 0 {
+                down
+            } else {
+                parent.column(1).into_owned()
+            };
+            let rest = min_rotation(&cur.column(1).into_owned(), &target) * cur;
+            c.r0[l] = parent.transpose() * rest;
+            let j = rest.transpose() * cur;
+            let mut q = UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix_unchecked(j));
+            q.renormalize();
+            c.q[l] = q;
+        }
+    }
+}
+
 fn run_fig6(
     opts: &ExperimentOptions,
     sink: &mut dyn FrameSink,
@@ -189,6 +233,7 @@ fn run_fig6(
     let mut out = Vec::new();
     for (label, collision) in [("collision", true), ("no_collision", false)] {
         let mut s = scene_solver(&loaded, &model, |gp| gp.collision = collision)?;
+        straighten_rest(&mut s);
         let wisps = guide_wisps(&s);
         let mut cross = Crossings::new(&s, &wisps);
         let spf = s.steps_per_frame();
