@@ -224,7 +224,10 @@ impl Renderer {
             .validate()
             .map_err(|(f, m)| format!("field `{f}`: {m}"))?;
         if !(1..=4).contains(&sampling.per_axis) {
-            return Err(format!("samples per axis must be 1 to 4, got {}", sampling.per_axis));
+            return Err(format!(
+                "samples per axis must be 1 to 4, got {}",
+                sampling.per_axis
+            ));
         }
         params.supersampling = sampling.per_axis;
         for (v, what) in [(width, "width"), (height, "height")] {

@@ -232,3 +232,47 @@ pub fn label_run_series(rec: &super::sink::Recording, k: usize, label: &str) -> 
     }
     Ok(())
 }
+
+/// Frame `index` of run `label` of a rendering experiment (no solver): at most `max_strands`
+/// of `strands` (evenly spread) as line strips at `/runs/<label>/hair/strands`, and `image`
+/// (lossless PNG: the experiments measure its pixels) at `/runs/<label>/render/hair`, on the
+/// `frame` timeline.
+pub fn log_rendered(
+    rec: &super::sink::Recording,
+    label: &str,
+    index: u64,
+    strands: &crate::frame::StrandBuf,
+    max_strands: usize,
+    image: &crate::render::Image,
+) -> anyhow::Result<()> {
+    let rec = rec.stream();
+    rec.set_time_sequence(
+        super::paths::TIMELINE_FRAME,
+        i64::try_from(index).unwrap_or(i64::MAX),
+    );
+    let n = strands.len();
+    let shown = n.min(max_strands.max(1));
+    let strips = (0..shown).map(|j| strands.strand(j * n / shown).to_vec());
+    let (r, g, b) = super::colors::HAIR_COLOR;
+    rec.log(
+        format!("/runs/{label}{}", super::paths::STRANDS),
+        &rerun::LineStrips3D::new(strips)
+            .with_radii([rerun::components::Radius::new_ui_points(0.5)])
+            .with_colors([rerun::Color::from_rgb(r, g, b)]),
+    )?;
+    let mut png = Vec::new();
+    image::ImageEncoder::write_image(
+        image::codecs::png::PngEncoder::new(&mut png),
+        &image.rgb,
+        image.width,
+        image.height,
+        image::ExtendedColorType::Rgb8,
+    )
+    .context("encoding the rendered image")?;
+    rec.log(
+        format!("/runs/{label}{}", super::paths::RENDER),
+        &rerun::EncodedImage::from_file_contents(png)
+            .with_media_type(rerun::components::MediaType::PNG),
+    )?;
+    Ok(())
+}
