@@ -150,6 +150,7 @@ impl FrameSink for RecordingSink {
                     target: c.target,
                 },
                 render: true,
+                stats: false,
             });
             super::runs_log::send_layout(&self.rec, &self.rendered, None)?;
         }

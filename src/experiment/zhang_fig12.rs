@@ -182,7 +182,7 @@ fn run_fig12(
         sink.rendered(label, 0, &frame.strands, &img)?;
         let (lower, outer, inner, n_outer, n_inner) = measure(&img, &px);
         let mut m = Map::new();
-        m.insert("kappa".into(), json!(kappa));
+        m.insert("kappa".into(), json!(round(f64::from(kappa), 4)));
         m.insert("lower_luminance".into(), json!(round(lower, 4)));
         m.insert("outer_luminance".into(), json!(round(outer, 4)));
         m.insert("inner_luminance".into(), json!(round(inner, 4)));

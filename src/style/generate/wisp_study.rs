@@ -208,33 +208,3 @@ impl StudyWisp {
         (ss / pts.len() as f64).sqrt()
     }
 }
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn the_key_strand_is_a_circular_arc() {
-        let st = WispStudy::default();
-        let w = st.grow(Offsets::Zhang { epsilon: 0.0 });
-        // Away from the ends (where the spline's phantom points straighten it), the curvature
-        // is 1/R.
-        let k = curvatures(&w.key);
-        let mid = &k[8..k.len() - 8];
-        for x in mid {
-            assert!(
-                (x - 1.0 / st.arc_radius).abs() < 0.05 / st.arc_radius,
-                "{x}"
-            );
-        }
-        // With ε = 0 every member is the key strand moved to its root: as curved, no spread
-        // beyond the roots'.
-        assert!(
-            w.waviness() < 1e-6 * 1.0 / st.arc_radius + 1e-9,
-            "{}",
-            w.waviness()
-        );
-        let (r0, r1) = (w.spread(0), w.spread(st.samples - 1));
-        assert!(r0 > 0.001 && (r1 - r0).abs() < 0.1 * r0, "{r0} {r1}");
-    }
-}
