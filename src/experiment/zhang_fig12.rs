@@ -21,7 +21,7 @@
 
 use serde_json::{json, Map};
 
-use super::zhang_images::{linear, luminance, round, side_by_side};
+use super::zhang_images::{linear, luminance, round, side_by_side, zoom};
 use super::{ExperimentDef, ExperimentOptions, ExperimentRun, FrameSink};
 use crate::frame::{Frame, StrandBuf};
 use crate::pipeline::FrameBuilder;
@@ -131,6 +131,25 @@ fn measure(img: &Image, px: &[Option<u8>]) -> (f64, f64, f64, usize, usize) {
     (mean(3), mean(0), mean(2), sums[0].1, sums[2].1)
 }
 
+/// The box `(x, y, w, h)` of the hair pixels of `px` (rows of `width`), grown by `margin`.
+fn hair_box(px: &[Option<u8>], width: u32, margin: u32) -> (u32, u32, u32, u32) {
+    let (mut lo, mut hi) = ([u32::MAX; 2], [0u32; 2]);
+    for (i, l) in px.iter().enumerate() {
+        if l.is_some() {
+            let p = [i as u32 % width, i as u32 / width];
+            for a in 0..2 {
+                lo[a] = lo[a].min(p[a]);
+                hi[a] = hi[a].max(p[a]);
+            }
+        }
+    }
+    if lo[0] > hi[0] {
+        return (0, 0, width, px.len() as u32 / width.max(1));
+    }
+    let (x0, y0) = (lo[0].saturating_sub(margin), lo[1].saturating_sub(margin));
+    (x0, y0, hi[0] + margin + 1 - x0, hi[1] + margin + 1 - y0)
+}
+
 fn run_fig12(
     _opts: &ExperimentOptions,
     sink: &mut dyn FrameSink,
@@ -198,7 +217,10 @@ fn run_fig12(
         });
         images.push(img);
     }
-    sink.picture("zhang_fig12", &side_by_side(&[&images[0], &images[1]], 8))?;
-    sink.picture("zhang_fig12_layers", &id_img)?;
+    // The pictures: the hair's part of each image, with a margin.
+    let part = hair_box(&px, SIZE.0, 12);
+    let crops: Vec<Image> = images.iter().map(|i| zoom(i, part, 1)).collect();
+    sink.picture("zhang_fig12", &side_by_side(&[&crops[0], &crops[1]], 8))?;
+    sink.picture("zhang_fig12_layers", &zoom(&id_img, part, 1))?;
     Ok(runs)
 }

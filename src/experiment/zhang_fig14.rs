@@ -25,7 +25,7 @@
 
 use serde_json::{json, Map};
 
-use super::zhang_images::{luminance, round, side_by_side};
+use super::zhang_images::{luminance, round, side_by_side, zoom};
 use super::{ExperimentDef, ExperimentOptions, ExperimentRun, FrameSink};
 use crate::frame::{BodyBuf, StrandBuf};
 use crate::render::camera::View;
@@ -210,21 +210,4 @@ fn run_fig14(
     let refs: Vec<&Image> = crops.iter().collect();
     sink.picture("zhang_fig14", &side_by_side(&refs, 6))?;
     Ok(runs)
-}
-
-/// The `(x, y, w, h)` part of `img`, each pixel a `k × k` block.
-fn zoom(img: &Image, (x0, y0, w, h): (u32, u32, u32, u32), k: u32) -> Image {
-    let (w, h) = (w.min(img.width - x0), h.min(img.height - y0));
-    let mut out = Image {
-        width: w * k,
-        height: h * k,
-        rgb: Vec::with_capacity((w * h * k * k * 3) as usize),
-    };
-    for y in 0..h * k {
-        for x in 0..w * k {
-            out.rgb
-                .extend_from_slice(&img.pixel(x0 + x / k, y0 + y / k));
-        }
-    }
-    out
 }

@@ -63,3 +63,20 @@ pub fn round(x: f64, digits: i32) -> f64 {
     let k = 10f64.powi(digits);
     (x * k).round() / k
 }
+
+/// The `(x, y, w, h)` part of `img`, each pixel a `k × k` block.
+pub fn zoom(img: &Image, (x0, y0, w, h): (u32, u32, u32, u32), k: u32) -> Image {
+    let (w, h) = (w.min(img.width - x0), h.min(img.height - y0));
+    let mut out = Image {
+        width: w * k,
+        height: h * k,
+        rgb: Vec::with_capacity((w * h * k * k * 3) as usize),
+    };
+    for y in 0..h * k {
+        for x in 0..w * k {
+            out.rgb
+                .extend_from_slice(&img.pixel(x0 + x / k, y0 + y / k));
+        }
+    }
+    out
+}
