@@ -173,3 +173,86 @@ fn zhang_fig14_command_prints_records_and_saves_its_picture() {
     assert_eq!(code, 0, "{err}");
     assert!(png.exists() && dir.path().join("pictures/zhang_fig14.png.bak").exists());
 }
+
+/// Point sampling (the `none` run's "no antialiasing"): an opaque hair over a plain background
+/// leaves every pixel either all hair or all background, and the hair covers one pixel per
+/// column; box-filtered coverage (how styles render) leaves partial pixels. A bad sampling is
+/// refused.
+#[test]
+fn point_sampled_lines_cover_whole_pixels_only() {
+    use wisptree::frame::{BodyBuf, StrandBuf};
+    use wisptree::render::{Camera, Image, RenderInput, RenderParams, Renderer, Sampling};
+    // Flat colour (ambient light only): every point of the hair has the same colour.
+    let params = RenderParams {
+        strand_alpha: 1.0,
+        strand_width: 1.0,
+        postfilter: 0.0,
+        kappa: 0.0,
+        ambient: 1.0,
+        diffuse: 0.0,
+        specular: 0.0,
+        ..RenderParams::default()
+    };
+    let strands = StrandBuf {
+        points: vec![[-0.1, -0.02, 0.0], [0.1, 0.024, 0.0]],
+        offsets: vec![0, 2],
+    };
+    let camera = Camera {
+        eye: [0.0, 0.0, 0.3],
+        target: [0.0; 3],
+        up: [0.0, 1.0, 0.0],
+        fov_y_deg: 30.0,
+    };
+    let render = |sampling| {
+        let mut r = Renderer::sampled(params.clone(), 96, 64, 1, sampling).unwrap();
+        let mut img = Image::default();
+        let body = BodyBuf::default();
+        r.render(
+            &RenderInput {
+                strands: &strands,
+                body: &body,
+            },
+            &camera,
+            &mut img,
+        );
+        img
+    };
+    let bg = render(Sampling::boxed(2)).pixel(0, 0);
+    let count = |img: &Image| {
+        let (mut partial, mut hair_columns) = (0, 0);
+        let mut full = None;
+        for x in 0..img.width {
+            let mut any = false;
+            for y in 0..img.height {
+                let p = img.pixel(x, y);
+                if p != bg {
+                    any = true;
+                    // Every hair pixel of a point-sampled image has one colour: the hair's.
+                    if *full.get_or_insert(p) != p {
+                        partial += 1;
+                    }
+                }
+            }
+            hair_columns += any as u32;
+        }
+        (partial, hair_columns)
+    };
+    let point = render(Sampling {
+        per_axis: 1,
+        point: true,
+    });
+    let (partial, columns) = count(&point);
+    assert_eq!(partial, 0);
+    // 79 pixels long on screen.
+    assert!(columns >= 75, "{columns}");
+    let (partial, _) = count(&render(Sampling::boxed(1)));
+    assert!(partial > 40, "{partial}");
+    let bad = Sampling {
+        per_axis: 5,
+        point: true,
+    };
+    let err = Renderer::sampled(params.clone(), 8, 8, 1, bad)
+        .err()
+        .unwrap();
+    assert!(err.contains("samples per axis"), "{err}");
+}

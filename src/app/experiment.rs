@@ -162,7 +162,7 @@ impl FrameSink for RecordingSink {
 pub fn run(cmd: &ExperimentCommand) -> anyhow::Result<()> {
     let all = experiment::all();
     if cmd.list || cmd.name.is_none() {
-        println!("experiments (wisptree experiment NAME [--save FILE] [--json FILE]):");
+        println!("experiments (wisptree experiment NAME [--save FILE] [--json FILE] [--out DIR]):");
         for e in &all {
             println!("  {:<14} {}", e.name, e.description);
         }
