@@ -19,6 +19,11 @@ pub struct ExperimentArgs {
     /// Write the numbers as JSON to FILE: `{"experiment": NAME, "runs": [{"label": .., ..}]}`.
     #[arg(long, value_name = "FILE")]
     pub json: Option<PathBuf>,
+    /// Write the experiment's pictures (the rendering experiments' PNGs) to this folder,
+    /// created if needed; a picture already there is kept as `NAME.png.bak`. Default:
+    /// `wisptree-experiments/<NAME>`.
+    #[arg(long, value_name = "DIR")]
+    pub out: Option<PathBuf>,
 }
 
 impl ExperimentArgs {
@@ -29,6 +34,7 @@ impl ExperimentArgs {
             list: self.list,
             save: self.save.clone(),
             json: self.json.clone(),
+            out: self.out.clone(),
         }
     }
 }

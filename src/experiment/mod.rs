@@ -11,7 +11,13 @@ pub mod chang;
 pub mod chang_fig6;
 pub mod chang_fig7;
 pub mod plante;
+pub mod zhang_fig12;
+pub mod zhang_fig13;
+pub mod zhang_fig14;
+mod zhang_images;
 
+use crate::frame::StrandBuf;
+use crate::render::Image;
 use crate::solver::{AdaptEvent, Solver};
 
 /// Where an experiment's frames go.
@@ -24,6 +30,24 @@ pub trait FrameSink {
         solver: &mut dyn Solver,
         events: &[AdaptEvent],
     ) -> anyhow::Result<()>;
+
+    /// Frame `index` of run `label` of a rendering experiment (no solver): the strands drawn
+    /// (the run's 3D view shows them) and the image the renderer made of them (beside it).
+    fn rendered(
+        &mut self,
+        _label: &str,
+        _index: u64,
+        _strands: &StrandBuf,
+        _image: &Image,
+    ) -> anyhow::Result<()> {
+        Ok(())
+    }
+
+    /// A picture of the experiment as a whole (its runs' images side by side), to be saved as
+    /// `<stem>.png`.
+    fn picture(&mut self, _stem: &str, _image: &Image) -> anyhow::Result<()> {
+        Ok(())
+    }
 }
 
 /// A sink that drops every frame (tests, `--json` without `--save`).
@@ -91,6 +115,9 @@ pub fn all() -> Vec<&'static ExperimentDef> {
         &chang::CHANG_SHAKE,
         &chang_fig6::CHANG_FIG6,
         &chang_fig7::CHANG_FIG7,
+        &zhang_fig12::ZHANG_FIG12,
+        &zhang_fig13::ZHANG_FIG13,
+        &zhang_fig14::ZHANG_FIG14,
     ]
 }
 

@@ -63,6 +63,7 @@ use std::time::{Duration, Instant};
 pub use crate::style::RenderParams;
 pub use camera::{bounds, Camera};
 pub use output::{encode_jpeg, encode_jpeg_into, write_png, Image};
+pub use raster::Sampling;
 pub use scene_16k::{bench_render, zhang_16k_body, zhang_16k_strands, RenderBench};
 pub use shading::{kajiya_kay_diffuse, kajiya_kay_specular};
 pub use shadow::{eq1_opacity, ShadowMaps, MAPS};
@@ -192,6 +193,8 @@ pub struct Renderer {
     hairy: Vec<(u32, u32)>,
     /// Per-strand linear colours; empty: every strand has `params.hair_color`.
     strand_colors: Vec<[f32; 3]>,
+    /// Lines point-sampled ([`Sampling::point`]).
+    point_sampled: bool,
 }
 
 impl Renderer {
@@ -203,9 +206,30 @@ impl Renderer {
         height: u32,
         threads: usize,
     ) -> Result<Renderer, String> {
+        let sampling = Sampling::boxed(params.supersampling);
+        Renderer::sampled(params, width, height, threads, sampling)
+    }
+
+    /// [`Renderer::new`], sampling lines as `sampling` says instead of `params.supersampling`
+    /// (which it replaces once `params` are checked): one point sample per pixel and the like,
+    /// for the antialiasing comparison of Zhang and Wünsche 2007, Fig. 14.
+    pub fn sampled(
+        mut params: RenderParams,
+        width: u32,
+        height: u32,
+        threads: usize,
+        sampling: Sampling,
+    ) -> Result<Renderer, String> {
         params
             .validate()
             .map_err(|(f, m)| format!("field `{f}`: {m}"))?;
+        if !(1..=4).contains(&sampling.per_axis) {
+            return Err(format!(
+                "samples per axis must be 1 to 4, got {}",
+                sampling.per_axis
+            ));
+        }
+        params.supersampling = sampling.per_axis;
         for (v, what) in [(width, "width"), (height, "height")] {
             if v == 0 || v > MAX_SIDE {
                 return Err(format!(
@@ -262,6 +286,7 @@ impl Renderer {
             bare: Vec::new(),
             hairy: Vec::new(),
             strand_colors: Vec::new(),
+            point_sampled: sampling.point,
         })
     }
 
@@ -591,6 +616,7 @@ impl Renderer {
             alpha,
             resolve: &resolve,
             level,
+            point_sampled: self.point_sampled,
         };
         let hairy = &self.hairy;
         let job = |k: usize, i: usize| {

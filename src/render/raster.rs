@@ -50,6 +50,27 @@ pub(crate) struct HalfBins {
     pub items: Vec<SegRec>,
 }
 
+/// How the tile pass samples a pixel: `per_axis`² samples, each taking a line's coverage
+/// of its cell (box-filtered, the renderer's way) or, with `point`, all of the line or none
+/// by whether its centre lies inside the line (OpenGL's lines without antialiasing).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Sampling {
+    /// Samples per pixel along each axis, 1 to 4.
+    pub per_axis: u32,
+    /// Point samples instead of box-filtered coverage.
+    pub point: bool,
+}
+
+impl Sampling {
+    /// `per_axis`² box-filtered samples per pixel: how styles render.
+    pub fn boxed(per_axis: u32) -> Sampling {
+        Sampling {
+            per_axis,
+            point: false,
+        }
+    }
+}
+
 /// Tile grid of an image.
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct Grid {

@@ -23,6 +23,8 @@ pub(super) struct TileSetup<'a> {
     pub(super) resolve: &'a resolve::Resolve<'a>,
     /// The instruction set of the tile pass.
     pub(super) level: Level,
+    /// Lines point-sampled ([`tile::TileBuf::point_sampled`]).
+    pub(super) point_sampled: bool,
 }
 
 multiversion! {
@@ -38,6 +40,7 @@ multiversion! {
         let mut layer = f.layers[t].lock().unwrap_or_else(|e| e.into_inner());
         let (first, second) = (f.halves[0].tile(t), f.halves[1].tile(t));
         w.buf.reset_with(f.grid.tile_samples(), &mut layer);
+        w.buf.point_sampled = f.point_sampled;
         let n_segs = raster::bucket_tile(
             first,
             second,

@@ -32,7 +32,7 @@ pub use colors::level_color;
 use colors::*;
 pub use paths::{TIMELINE_FRAME, TIMELINE_SIM_TIME};
 pub use runs_layout::{
-    label_run_series, runs_blueprint, send_runs_blueprint, RunView, RUN_ACTIVE_TOTAL,
+    label_run_series, log_rendered, runs_blueprint, send_runs_blueprint, RunView, RUN_ACTIVE_TOTAL,
 };
 
 use std::fmt::Write as _;

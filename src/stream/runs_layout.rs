@@ -27,6 +27,9 @@ pub struct RunView {
     pub camera: BlueprintCamera,
     /// The run has rendered frames at `/runs/<label>/render/hair`: show them beside its 3D view.
     pub render: bool,
+    /// The run steps a solver and logs its stats: the overlaid plots show them (a layout of
+    /// runs none of which does, a rendering experiment's, has no plots).
+    pub stats: bool,
 }
 
 /// Total active nodes of a run (the sum over levels), the stat the multi-run layout overlays:
@@ -100,6 +103,10 @@ pub fn runs_blueprint(
         bp.log(path.as_str(), &c).map(|()| path)
     };
     let grid = container(0, ContainerKind::Grid, &cells, &[])?;
+    if !runs.iter().any(|r| r.stats) {
+        container(2, ContainerKind::Vertical, &[grid], &[1.0])?;
+        return finish_blueprint(&bp, storage);
+    }
     let (active, step_ms) = (
         super::paths::stat(RUN_ACTIVE_TOTAL),
         super::paths::stat(crate::report::names::STEP_MS),
@@ -110,6 +117,15 @@ pub fn runs_blueprint(
     ];
     let plots = container(1, ContainerKind::Horizontal, &plots, &[1.0, 1.0])?;
     container(2, ContainerKind::Vertical, &[grid, plots], &[3.0, 1.0])?;
+    finish_blueprint(&bp, storage)
+}
+
+/// The viewport (the layout's root container, nothing automatic) and the panels, then the
+/// blueprint's messages.
+fn finish_blueprint(
+    bp: &RecordingStream,
+    storage: rerun::sink::MemorySinkStorage,
+) -> anyhow::Result<Vec<LogMsg>> {
     bp.log(
         "viewport",
         &ViewportBlueprint::new()
@@ -117,7 +133,7 @@ pub fn runs_blueprint(
             .with_auto_layout(AutoLayout::from(false))
             .with_auto_views(AutoViews::from(false)),
     )?;
-    log_panels(&bp)?;
+    log_panels(bp)?;
     bp.flush_blocking()
         .map_err(|e| anyhow::anyhow!("flushing the blueprint stream: {e}"))?;
     Ok(storage.take())
@@ -230,5 +246,49 @@ pub fn label_run_series(rec: &super::sink::Recording, k: usize, label: &str) -> 
                 .with_names([label]),
         )?;
     }
+    Ok(())
+}
+
+/// Frame `index` of run `label` of a rendering experiment (no solver): at most `max_strands`
+/// of `strands` (evenly spread) as line strips at `/runs/<label>/hair/strands`, and `image`
+/// (lossless PNG: the experiments measure its pixels) at `/runs/<label>/render/hair`, on the
+/// `frame` timeline.
+pub fn log_rendered(
+    rec: &super::sink::Recording,
+    label: &str,
+    index: u64,
+    strands: &crate::frame::StrandBuf,
+    max_strands: usize,
+    image: &crate::render::Image,
+) -> anyhow::Result<()> {
+    let rec = rec.stream();
+    rec.set_time_sequence(
+        super::paths::TIMELINE_FRAME,
+        i64::try_from(index).unwrap_or(i64::MAX),
+    );
+    let n = strands.len();
+    let shown = n.min(max_strands.max(1));
+    let strips = (0..shown).map(|j| strands.strand(j * n / shown).to_vec());
+    let (r, g, b) = super::colors::HAIR_COLOR;
+    rec.log(
+        format!("/runs/{label}{}", super::paths::STRANDS),
+        &rerun::LineStrips3D::new(strips)
+            .with_radii([rerun::components::Radius::new_ui_points(0.5)])
+            .with_colors([rerun::Color::from_rgb(r, g, b)]),
+    )?;
+    let mut png = Vec::new();
+    image::ImageEncoder::write_image(
+        image::codecs::png::PngEncoder::new(&mut png),
+        &image.rgb,
+        image.width,
+        image.height,
+        image::ExtendedColorType::Rgb8,
+    )
+    .context("encoding the rendered image")?;
+    rec.log(
+        format!("/runs/{label}{}", super::paths::RENDER),
+        &rerun::EncodedImage::from_file_contents(png)
+            .with_media_type(rerun::components::MediaType::PNG),
+    )?;
     Ok(())
 }

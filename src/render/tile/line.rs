@@ -114,7 +114,9 @@ impl TileBuf {
                 {
                     continue;
                 }
-                if thin {
+                if self.point_sampled {
+                    self.point_group(&line, gs, ge, alpha);
+                } else if thin {
                     self.thin_group::<I>(&line, gs, ge, alpha);
                 } else {
                     self.wide_group(&line, gs, ge, alpha);
@@ -203,6 +205,38 @@ impl TileBuf {
                 fj += 1.0;
                 let at = col_i * stride_maj + j * stride_min;
                 self.blend(at, col.block(j), z, w0, cov, &rgb);
+            }
+        }
+    }
+
+    /// Draws columns `gs..ge` of line `l` point-sampled ([`TileBuf::point_sampled`]): a column
+    /// whose centre the segment spans (half-open, so joined segments share no column) takes
+    /// the line at its centre, and each sample of it whose centre lies within the line's
+    /// cross-section gets the line's full opacity.
+    fn point_group(&mut self, l: &Line, gs: usize, ge: usize, alpha: f32) {
+        let n = self.n;
+        let (stride_maj, stride_min) = if l.x_major { (1, n) } else { (n, 1) };
+        for col_i in gs..ge {
+            let m = col_i as f32 + 0.5;
+            if m < l.maj0 || m >= l.maj1 {
+                continue;
+            }
+            let t = (m - l.maj0) * l.inv;
+            let c = l.min0 + t * (l.min1 - l.min0);
+            let z = l.z0 + t * l.dz;
+            let rgb = Px([
+                l.c0[0] + t * l.dc[0],
+                l.c0[1] + t * l.dc[1],
+                l.c0[2] + t * l.dc[2],
+                -1.0,
+            ]);
+            // Samples j with centre j + 0.5 in [c − h, c + h).
+            let j0 = ceil_pos(c - l.h - 0.5);
+            let j1 = ceil_pos(c + l.h - 0.5).min(n);
+            let col = Column::new(l.x_major, col_i, self.stride);
+            for j in j0..j1 {
+                let at = col_i * stride_maj + j * stride_min;
+                self.blend(at, col.block(j), z, alpha, 1.0, &rgb);
             }
         }
     }

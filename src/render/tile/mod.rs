@@ -100,6 +100,11 @@ pub(crate) struct TileBuf {
     block_close: Vec<f32>,
     /// Whether the body covers any sample of the tile.
     body_seen: bool,
+    /// Lines are point-sampled (a sample takes a line whose centre line passes within its
+    /// half-width of the sample's centre, fully, else not at all), as OpenGL draws lines
+    /// without antialiasing: the "aliasing" image of Zhang and Wünsche 2007, Fig. 14. Only
+    /// for that comparison ([`super::Sampling`]); the default is box-filtered coverage.
+    pub point_sampled: bool,
 }
 
 impl TileBuf {

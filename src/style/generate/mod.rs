@@ -15,6 +15,7 @@ use super::{Curl, Ellipsoid, Generated, RawHair, RawStrand, Sphere, Style};
 use std::f64::consts::TAU;
 
 mod geometry;
+pub mod wisp_study;
 
 use geometry::*;
 pub use geometry::{direction, implicit, scalp_normal, scalp_point, styling_frame, Frame};
