@@ -95,7 +95,7 @@ fn inspect_coverage_prints_four_views() {
         "--coverage",
         "short",
         "--size",
-        "160",
+        "320x240",
         "--images",
         imgs.to_str().unwrap(),
     ]);
@@ -117,8 +117,14 @@ fn inspect_coverage_prints_four_views() {
         assert!((0.0..=100.0).contains(p) && *p > 20.0, "{v} {p}");
         assert!(imgs.join(format!("coverage_{v}.png")).is_file());
     }
-    let (code, json, err) =
-        wisptree(&["inspect", "--coverage", "short", "--size", "160", "--json"]);
+    let (code, json, err) = wisptree(&[
+        "inspect",
+        "--coverage",
+        "short",
+        "--size",
+        "320x240",
+        "--json",
+    ]);
     assert_eq!(code, 0, "{err}");
     let v: serde_json::Value = serde_json::from_str(&json).unwrap();
     for (k, (_, p)) in percents.iter().enumerate() {

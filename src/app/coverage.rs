@@ -75,7 +75,7 @@ pub struct ViewCoverage {
 pub fn of_model(
     model: &HairModel,
     params: &RenderParams,
-    size: u32,
+    size: (u32, u32),
     images: Option<&Path>,
 ) -> anyhow::Result<Vec<ViewCoverage>> {
     let k = model.k;
@@ -95,16 +95,32 @@ pub fn of_model(
     measure(&strands, &roots, &scalp, params, size, images)
 }
 
+/// The box each view frames: the hair's and the scalp's, as `wisptree render` frames the hair
+/// (so that a strand is as wide, in millimetres, as in its pictures).
+fn framed_box(strands: &StrandBuf, scalp: &Scalp) -> ([f32; 3], [f32; 3]) {
+    let (mut lo, mut hi) = crate::render::camera::bounds(&strands.points);
+    if strands.points.is_empty() {
+        (lo, hi) = (scalp.center, scalp.center);
+    }
+    for a in 0..3 {
+        lo[a] = lo[a].min(scalp.center[a] - scalp.radii[a]);
+        hi[a] = hi[a].max(scalp.center[a] + scalp.radii[a]);
+    }
+    (lo, hi)
+}
+
 /// The coverage of `strands` over the part of `scalp` within [`SCALP_MARGIN`] of `roots`, from
-/// the four [`VIEWS`], on `size × size` images framing the scalp.
+/// the four [`VIEWS`], on `size` (width, height) images framing the hair and the scalp as
+/// `wisptree render` frames the hair.
 pub fn measure(
     strands: &StrandBuf,
     roots: &[[f32; 3]],
     scalp: &Scalp,
     params: &RenderParams,
-    size: u32,
+    size: (u32, u32),
     images: Option<&Path>,
 ) -> anyhow::Result<Vec<ViewCoverage>> {
+    let (width, height) = size;
     let body = BodyBuf {
         scalp_center: scalp.center,
         scalp_radii: scalp.radii,
@@ -122,8 +138,8 @@ pub fn measure(
                 body_color,
                 ..flat.clone()
             },
-            size,
-            size,
+            width,
+            height,
             crate::render::default_threads(),
         )
         .map_err(|e| anyhow::anyhow!("rendering: {e}"))
@@ -135,10 +151,7 @@ pub fn measure(
         strands,
         body: &body,
     };
-    // Frame the scalp (with the hair lying on it) rather than the hanging hair.
-    let reach = scalp.radii.map(|r| r * 1.15);
-    let lo = [0, 1, 2].map(|a| scalp.center[a] - reach[a]);
-    let hi = [0, 1, 2].map(|a| scalp.center[a] + reach[a]);
+    let (lo, hi) = framed_box(strands, scalp);
     let (mut a, mut b) = (Image::default(), Image::default());
     let mut out = Vec::with_capacity(VIEWS.len());
     for (name, dir) in VIEWS {
@@ -153,10 +166,10 @@ pub fn measure(
         if let Some(r) = shown.as_mut() {
             r.render(&input, &camera, &mut shot);
         }
-        let view = View::new(&camera, size, size);
+        let view = View::new(&camera, width, height);
         let (mut scalp_pixels, mut showing_pixels) = (0, 0);
-        for y in 0..size {
-            for x in 0..size {
+        for y in 0..height {
+            for x in 0..width {
                 let Some(p) = scalp_hit(&view, scalp, x as f32 + 0.5, y as f32 + 0.5) else {
                     continue;
                 };
@@ -173,7 +186,7 @@ pub fn measure(
                 if !shot.rgb.is_empty() {
                     // The map of the count: the scalp that shows in red, the hidden scalp
                     // tinted green, over the render.
-                    let o = ((y * size + x) * 3) as usize;
+                    let o = ((y * width + x) * 3) as usize;
                     let px = &mut shot.rgb[o..o + 3];
                     if showing {
                         px.copy_from_slice(&[230, 30, 30]);
@@ -332,7 +345,7 @@ mod tests {
             strand_width: 3.0,
             ..RenderParams::default()
         };
-        let views = measure(&strands, &roots, &scalp, &params, 200, None).unwrap();
+        let views = measure(&strands, &roots, &scalp, &params, (200, 200), None).unwrap();
         let top = &views[0];
         assert_eq!(top.view, "top");
         assert!(top.scalp_pixels > 3_000, "{top:?}");
@@ -359,10 +372,10 @@ mod tests {
         };
         let roots = [[0.0, 1.72, 0.0]];
         let p = RenderParams::default();
-        let v = measure(&strands, &roots, &scalp, &p, 96, None).unwrap();
+        let v = measure(&strands, &roots, &scalp, &p, (96, 96), None).unwrap();
         assert!(v[0].scalp_pixels > 0 && v[0].showing_pixels == v[0].scalp_pixels);
         assert_eq!(v[0].hidden_percent, 0.0);
-        let v = measure(&strands, &[], &scalp, &p, 96, None).unwrap();
+        let v = measure(&strands, &[], &scalp, &p, (96, 96), None).unwrap();
         assert!(v.iter().all(|c| c.scalp_pixels == 0));
     }
 }

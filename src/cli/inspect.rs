@@ -17,9 +17,10 @@ pub struct InspectArgs {
     /// hair-bearing scalp pixels (within 10 mm of a root) that the hair hides, one line per view
     #[arg(long)]
     pub coverage: bool,
-    /// With --coverage: side of the square images, pixels (64 to 2048)
-    #[arg(long, default_value_t = 400, value_parser = clap::value_parser!(u32).range(64..=2048))]
-    pub size: u32,
+    /// With --coverage: image size, WIDTHxHEIGHT pixels (as `wisptree render`'s, which frames
+    /// the hair the same way: a strand is as wide as in its pictures)
+    #[arg(long, value_name = "WxH", default_value = "640x480", value_parser = super::args::parse_size)]
+    pub size: (u32, u32),
     /// With --coverage: also write each view's render into this folder (`coverage_top.png`, …)
     #[arg(long, value_name = "DIR")]
     pub images: Option<std::path::PathBuf>,
