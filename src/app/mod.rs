@@ -20,6 +20,8 @@
 mod console;
 pub mod experiment;
 pub mod export;
+mod export_space;
+pub mod export_usd;
 pub mod keys;
 mod log_thread;
 pub mod reload;
@@ -34,6 +36,7 @@ pub mod sweep;
 pub mod sweep_plan;
 pub mod terminal;
 pub mod threads;
+pub mod usda;
 
 pub use run::{run, run_with, simulate_into, RunOptions, WebOptions};
 pub use sim_thread::{slow_motion_message, Load};
