@@ -94,6 +94,9 @@ pub fn export(opts: &ExportOptions, progress: bool) -> anyhow::Result<ExportSumm
     for n in &scene.model.notes {
         eprintln!("wisptree: note: {n}");
     }
+    for w in scene.warnings() {
+        eprintln!("warning: {w}");
+    }
     let frames = scene.frames_for(opts.seconds);
     let written = frames.div_ceil(u64::from(opts.every));
     space::check(opts, &scene.model, written)?;
