@@ -1,6 +1,7 @@
 //! Will the export fit? The bytes an export writes, bounded from above before anything is
 //! simulated, against the free space of the output's disk: `export --seconds 1e6` of the Short
-//! style would write 75 TB, and must be refused at once, not after filling the disk.
+//! style would write 57.6 TB of `.hair`, and must be refused at once, not after filling the
+//! disk.
 
 use std::path::Path;
 
