@@ -294,11 +294,8 @@ pub const FAR_FROM_SCALP: f64 = 0.1;
 /// head): imported hair with the default scalp, 1.5 m above a USC-HairSalon head.
 fn scalp_warning(model: &HairModel) -> Option<String> {
     let roots = (0..model.strands.len()).map(|s| model.strands.rest[s * model.k]);
-    let d = crate::style::scalp::median_root_distance(
-        &model.scalp_center,
-        &model.scalp_radii,
-        roots,
-    )?;
+    let d =
+        crate::style::scalp::median_root_distance(&model.scalp_center, &model.scalp_radii, roots)?;
     (d > FAR_FROM_SCALP).then(|| {
         let c = model.scalp_center;
         format!(

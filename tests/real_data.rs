@@ -36,12 +36,23 @@ fn export_refuses_absurd_durations_and_what_the_disk_cannot_hold() {
     assert_eq!(code, 2, "{err}");
     assert!(err.contains("1e6"), "{err}");
     // 10⁶ s of Short is 25 million frames of 2.6 MB: refused before a frame is simulated.
-    for (format, out) in [("hair", "frames"), ("tfx", "frames"), ("usd", "frames/s.usda")] {
+    for (format, out) in [
+        ("hair", "frames"),
+        ("tfx", "frames"),
+        ("usd", "frames/s.usda"),
+    ] {
         let t0 = Instant::now();
         let (code, _, err) = wisptree_in(
             d,
             &[
-                "export", "--style", "short", "--seconds", "1e6", "--format", format, "--out",
+                "export",
+                "--style",
+                "short",
+                "--seconds",
+                "1e6",
+                "--format",
+                format,
+                "--out",
                 out,
             ],
         );
@@ -55,7 +66,10 @@ fn export_refuses_absurd_durations_and_what_the_disk_cannot_hold() {
             line.contains(out) && line.contains("free") && line.contains("25000000 frames"),
             "{format}: {line}"
         );
-        assert!(!d.join("frames").exists(), "{format}: something was written");
+        assert!(
+            !d.join("frames").exists(),
+            "{format}: something was written"
+        );
         // A guard against writing until the disk is full, not a timing.
         assert!(t0.elapsed() < Duration::from_secs(60));
     }
@@ -106,7 +120,9 @@ fn short_with_body(dir: &Path, r: f64) -> String {
 
 /// The number after `before` in `line` (`… 12 of them …` with `before` = "").
 fn number_before(line: &str, after: &str) -> f64 {
-    let at = line.find(after).unwrap_or_else(|| panic!("`{after}` in {line}"));
+    let at = line
+        .find(after)
+        .unwrap_or_else(|| panic!("`{after}` in {line}"));
     let word = line[..at].split_whitespace().last().unwrap();
     word.parse()
         .unwrap_or_else(|_| panic!("a number before `{after}`: {line}"))
@@ -200,7 +216,11 @@ fn salon_data(path: &Path, short_strands: usize) {
             0.1 * el.cos() * az.cos(),
         ];
         // The first `short_strands` strands are 7.5 µm long stubs.
-        let step = if s < short_strands { 7.5e-6 / 9.0 } else { 0.03 };
+        let step = if s < short_strands {
+            7.5e-6 / 9.0
+        } else {
+            0.03
+        };
         b.extend_from_slice(&10i32.to_le_bytes());
         for v in 0..10 {
             let p = [root[0], root[1] - step * v as f64, root[2]];
@@ -219,9 +239,11 @@ fn fit_body_puts_the_scalp_on_the_fitted_head_and_a_far_scalp_is_reported() {
     let d = dir.path();
     salon_data(&d.join("hairstyles/strands00001.data"), 0);
     // README's own `salon` example, as written there.
-    let readme = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("README.md"))
-        .unwrap();
-    let at = readme.find("name: \"salon\"").expect("README has the salon example");
+    let readme =
+        std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("README.md")).unwrap();
+    let at = readme
+        .find("name: \"salon\"")
+        .expect("README has the salon example");
     let start = readme[..at].rfind("```ron").unwrap() + "```ron".len();
     let end = at + readme[at..].find("```").unwrap();
     std::fs::write(d.join("salon.ron"), &readme[start..end]).unwrap();
@@ -255,7 +277,10 @@ fn fit_body_puts_the_scalp_on_the_fitted_head_and_a_far_scalp_is_reported() {
         .lines()
         .find(|l| l.contains("from the scalp"))
         .unwrap_or_else(|| panic!("no warning about the far scalp: {err}"));
-    assert!(line.contains("head.scalp") && line.contains("fit_body"), "{line}");
+    assert!(
+        line.contains("head.scalp") && line.contains("fit_body"),
+        "{line}"
+    );
     let metres = number_before(line, "m from the scalp");
     assert!((1.3..1.6).contains(&metres), "{line}");
 }
@@ -273,7 +298,15 @@ fn near_zero_length_strands_are_counted_at_load() {
     .unwrap();
     for args in [
         &["inspect", "stubs.ron"][..],
-        &["export", "--style", "stubs.ron", "--seconds", "0.04", "--out", "x"],
+        &[
+            "export",
+            "--style",
+            "stubs.ron",
+            "--seconds",
+            "0.04",
+            "--out",
+            "x",
+        ],
     ] {
         let (code, _, err) = wisptree_in(d, args);
         assert_eq!(code, 0, "{args:?}: {err}");

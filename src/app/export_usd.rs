@@ -51,6 +51,8 @@ pub struct UsdLayer {
     path: PathBuf,
     tmp: PathBuf,
     w: Option<BufWriter<File>>,
+    /// The temporary file became the output (else it is removed on drop).
+    renamed: bool,
     meta: LayerMeta,
     started: bool,
     extents: Vec<(u64, [f32; 3], [f32; 3])>,
@@ -88,6 +90,7 @@ impl UsdLayer {
             path: path.to_path_buf(),
             tmp,
             w: Some(BufWriter::with_capacity(1 << 20, file)),
+            renamed: false,
             meta,
             started: false,
             extents: Vec::new(),
@@ -169,6 +172,7 @@ impl UsdLayer {
         file.sync_all().map_err(|e| cannot_write(&path, e))?;
         drop(file);
         std::fs::rename(&self.tmp, &self.path).map_err(|e| cannot_write(&path, e))?;
+        self.renamed = true;
         Ok(std::fs::metadata(&self.path).map_or(0, |m| m.len()))
     }
 
@@ -194,7 +198,8 @@ impl UsdLayer {
 
 impl Drop for UsdLayer {
     fn drop(&mut self) {
-        if self.w.take().is_some() {
+        drop(self.w.take());
+        if !self.renamed {
             let _ = std::fs::remove_file(&self.tmp);
         }
     }

@@ -60,7 +60,11 @@ pub struct Head {
     /// The scalp, on which generated roots are placed (the motion's pivot, the viewer's head).
     /// Default: with `fit_body`, a sphere on the fitted head; else centre (0, 1.6, 0), radii
     /// (0.075, 0.095, 0.09) m. [`Head::scalp`] gives the one in force.
-    #[serde(default, with = "super::scalp::given", skip_serializing_if = "Option::is_none")]
+    #[serde(
+        default,
+        with = "super::scalp::given",
+        skip_serializing_if = "Option::is_none"
+    )]
     pub scalp: Option<Ellipsoid>,
     /// Collision spheres of the head and body, moving with the character.
     /// Default: a head sphere just inside the scalp, a neck and two shoulders/torso spheres.
