@@ -16,6 +16,9 @@
 //! terminal      raw mode, restored on every way out
 //! stop          the one stop signal (Ctrl-C, q, the end)
 //! ```
+//!
+//! `export` writes `.hair` and `.tfx` files itself, and a USD layer through `export_usd` (the
+//! layer's prims) and `usda` (the text format); `export_space` checks the free space first.
 
 mod console;
 pub mod experiment;

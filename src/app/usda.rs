@@ -132,10 +132,11 @@ pub fn int_array(w: &mut impl Write, xs: &[u32]) -> io::Result<()> {
 /// A `matrix4d` in USD's row-vector convention (`p' = p · M`, translation in the last row),
 /// from a rotation `r` (row-major, acting on column vectors) and a translation `t`.
 pub fn matrix4d(w: &mut impl Write, r: [[f64; 3]; 3], t: [f64; 3]) -> io::Result<()> {
-    // Row i of M is column i of r: (p · Mᵀ-block) equals r · p.
+    // Row i of M is column i of r, so that p · M equals r · p.
+    let columns = [0, 1, 2].map(|i| [r[0][i], r[1][i], r[2][i]]);
     write!(w, "( ")?;
-    for i in 0..3 {
-        write!(w, "({:?}, {:?}, {:?}, 0), ", r[0][i], r[1][i], r[2][i])?;
+    for c in columns {
+        write!(w, "({:?}, {:?}, {:?}, 0), ", c[0], c[1], c[2])?;
     }
     write!(w, "({:?}, {:?}, {:?}, 1) )", t[0], t[1], t[2])
 }
