@@ -213,11 +213,16 @@ impl Scene {
 
 /// Strand roots and rest nodes that start inside a body sphere, per sphere: how many, and by
 /// how much at most. Imported hair often has them (its collision spheres were fitted for
-/// another solver); the body then pushes those nodes out at the first step, and a root stays
-/// inside for good.
+/// another solver). What then happens, as measured (`tests/real_data.rs`): a wisp root
+/// (cross-section 0 of a GC, on any level) is fixed to the head and stays inside for the whole
+/// run, as deep as it started; the body pushes every other node out, the AWT at its first step,
+/// the layered model within its first frames.
 pub fn warnings(model: &HairModel) -> Vec<String> {
     let mut out = Vec::new();
     let k = model.k;
+    if let Some(w) = scalp_warning(model) {
+        out.push(w);
+    }
     for (si, sp) in model.body.iter().enumerate() {
         let c = nalgebra::Vector3::from(sp.center);
         let depth = |p: &nalgebra::Vector3<f64>| sp.radius - (p - c).norm();
@@ -230,12 +235,17 @@ pub fn warnings(model: &HairModel) -> Vec<String> {
             }
         }
         let (mut nodes, mut node_depth) = (0usize, 0.0f64);
+        let (mut wisp_roots, mut wisp_root_depth) = (0usize, 0.0f64);
         for lv in &model.levels {
-            for p in &lv.rest_pos {
+            for (j, p) in lv.rest_pos.iter().enumerate() {
                 let d = depth(p);
                 if d > 0.0 {
                     nodes += 1;
                     node_depth = node_depth.max(d);
+                    if j % k == 0 {
+                        wisp_roots += 1;
+                        wisp_root_depth = wisp_root_depth.max(d);
+                    }
                 }
             }
         }
@@ -251,14 +261,51 @@ pub fn warnings(model: &HairModel) -> Vec<String> {
             ));
         }
         if nodes > 0 {
+            let others = nodes - wisp_roots;
+            let fate = match (wisp_roots, others) {
+                (0, _) => "none is a wisp root: the body pushes them out (the AWT at its first \
+                           step, the layered model within its first frames)"
+                    .to_owned(),
+                (r, 0) => format!(
+                    "all {r} are wisp roots (cross-section 0), fixed to the head: they stay \
+                     inside for the whole run"
+                ),
+                (r, o) => format!(
+                    "{r} of them are wisp roots (cross-section 0), fixed to the head, which stay \
+                     inside, by up to {:.1} mm, for the whole run; the body pushes the other {o} \
+                     out (the AWT at its first step, the layered model within its first frames)",
+                    wisp_root_depth * 1e3
+                ),
+            };
             out.push(format!(
-                "{nodes} rest nodes (all levels) are inside {at}, by up to {:.1} mm; the body \
-                 pushes them out at the first step",
+                "{nodes} rest nodes (all levels) are inside {at}, by up to {:.1} mm: {fate}",
                 node_depth * 1e3
             ));
         }
     }
     out
+}
+
+/// Roots this far from the scalp's surface (median) mean the scalp is not on this hair's head:
+/// a real scalp is within a few centimetres of every root.
+pub const FAR_FROM_SCALP: f64 = 0.1;
+
+/// A warning when the strands' roots lie far from the scalp (the motion's pivot, the viewer's
+/// head): imported hair with the default scalp, 1.5 m above a USC-HairSalon head.
+fn scalp_warning(model: &HairModel) -> Option<String> {
+    let roots = (0..model.strands.len()).map(|s| model.strands.rest[s * model.k]);
+    let d =
+        crate::style::scalp::median_root_distance(&model.scalp_center, &model.scalp_radii, roots)?;
+    (d > FAR_FROM_SCALP).then(|| {
+        let c = model.scalp_center;
+        format!(
+            "half of the strand roots lie more than {d:.2} m from the scalp (centre ({:.3}, \
+             {:.3}, {:.3}) m): the motion turns the hair about that far-away head, and the \
+             viewer draws the head there. Set head.scalp on the hair's head, or use \
+             head: (fit_body: true) without a scalp to place it on the fitted head",
+            c.x, c.y, c.z
+        )
+    })
 }
 
 impl Scene {

@@ -166,6 +166,7 @@ fn tfx_export_every_other_frame_with_any_model() {
             format,
             out,
             every,
+            debug_structure: false,
         };
         let tfx_dir = dir.path().join(format!("{model}-tfx"));
         let hair_dir = dir.path().join(format!("{model}-hair"));

@@ -70,7 +70,7 @@ fn assert_outside_body(s: &Style, hair: &RawHair, what: &str) {
 
 fn assert_roots_on_scalp(s: &Style, hair: &RawHair, what: &str) {
     for (k, st) in hair.strands.iter().enumerate() {
-        let e = style::generate::implicit(&s.head.scalp, st.points[0]);
+        let e = style::generate::implicit(&s.head.scalp(), st.points[0]);
         assert!(
             (e - 1.0).abs() < 1e-9,
             "{what}: root of strand {k} is off the scalp (implicit = {e})"
@@ -91,7 +91,7 @@ fn roots_lie_on_the_scalp_inside_their_tile() {
     assert_eq!(hair.wisp_names.len(), 8, "{:?}", hair.wisp_names);
     assert_roots_on_scalp(&s.style, &hair, "test style");
     let g = generated(&s.style);
-    let c = s.style.head.scalp.center;
+    let c = s.style.head.scalp().center;
     let mut per_tile = vec![0usize; hair.wisp_names.len()];
     for st in &hair.strands {
         per_tile[st.wisp as usize] += 1;
@@ -205,7 +205,7 @@ fn a_mirrored_wisp_is_the_exact_mirror_image_of_its_source() {
     assert_eq!(hair.wisp_names.len(), 16);
     assert_eq!(hair.wisp_names[4], "right[0,0]");
     assert_eq!(hair.wisp_names[15], "shifted[1,1]");
-    let cx = s.style.head.scalp.center[0];
+    let cx = s.style.head.scalp().center[0];
     let of = |w: u32| -> Vec<&Vec<[f64; 3]>> {
         hair.strands
             .iter()
@@ -229,7 +229,7 @@ fn a_mirrored_wisp_is_the_exact_mirror_image_of_its_source() {
         assert!(mir.iter().all(|s| s[0][0] < cx));
     }
     // A non-mirrored copy is regrown on the shifted region: new roots, in the new place.
-    let c = s.style.head.scalp.center;
+    let c = s.style.head.scalp().center;
     for w in 12..16u32 {
         for st in of(w) {
             let (az, _) = angles(c, st[0]);
@@ -369,7 +369,7 @@ fn the_four_paper_styles() {
                 "{file}: smooth hair too wavy, arc/chord {wiggle}"
             );
         }
-        let c = st.head.scalp.center;
+        let c = st.head.scalp().center;
         let lowest = hair
             .strands
             .iter()

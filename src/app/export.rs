@@ -1,9 +1,15 @@
 //! `wisptree export`: simulate a style under a motion with any model and write the dense
 //! strands of every n-th frame as `.hair` (Cem Yuksel's format) or `.tfx` (TressFX 4.0) files,
-//! `frame_00000.hair` and so on, for renderers and other tools.
+//! `frame_00000.hair` and so on, or as one USD layer (`export_usd`), for renderers and other
+//! tools.
 //!
 //! Coordinates are written in metres, y up, as simulated. A frame is numbered as in `run`'s
 //! `frame` timeline: frame 0 is the state after the first frame's steps.
+//!
+//! Before anything is simulated, the export checks that what it will write fits in the free
+//! space of the output's disk (an export of 10⁶ s writes terabytes). Every file is written
+//! under a temporary name and renamed once complete, so a failed write (a full disk) leaves no
+//! half-written file under the final name.
 
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
@@ -15,8 +21,11 @@ use crate::scene::Scene;
 use crate::solver::SolverKind;
 use crate::style::{hair_file, tfx_write};
 
+use super::export_space as space;
+use super::{export_usd, usda};
+
 /// Catmull-Rom points per span of the exported strands: K control points become 2K − 1.
-const SUBDIVISIONS: usize = 2;
+pub(crate) const SUBDIVISIONS: usize = 2;
 
 /// The file format of `export`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
@@ -25,6 +34,8 @@ pub enum ExportFormat {
     Hair,
     /// TressFX 4.0 `.tfx`: every strand resampled to 32 vertices by arc length.
     Tfx,
+    /// One USD layer (`.usda`, text) of every exported frame: `--out` names the file.
+    Usd,
 }
 
 impl ExportFormat {
@@ -33,6 +44,7 @@ impl ExportFormat {
         match self {
             ExportFormat::Hair => "hair",
             ExportFormat::Tfx => "tfx",
+            ExportFormat::Usd => "usda",
         }
     }
 }
@@ -50,10 +62,12 @@ pub struct ExportOptions {
     pub seconds: f64,
     /// File format.
     pub format: ExportFormat,
-    /// Output folder, created if needed.
+    /// Output folder, created if needed (`hair`, `tfx`); the layer's file (`usd`).
     pub out: PathBuf,
     /// Write frames 0, every, 2·every, … (≥ 1).
     pub every: u32,
+    /// `usd` only: the model's active nodes and segments too (`/wisptree/structure`).
+    pub debug_structure: bool,
 }
 
 /// What an export wrote.
@@ -80,13 +94,41 @@ pub fn export(opts: &ExportOptions, progress: bool) -> anyhow::Result<ExportSumm
     for n in &scene.model.notes {
         eprintln!("wisptree: note: {n}");
     }
-    std::fs::create_dir_all(&opts.out).map_err(|e| {
-        BadInput(format!(
-            "--out {}: cannot create the folder: {e}",
-            opts.out.display()
-        ))
-    })?;
+    for w in scene.warnings() {
+        eprintln!("warning: {w}");
+    }
     let frames = scene.frames_for(opts.seconds);
+    let written = frames.div_ceil(u64::from(opts.every));
+    space::check(opts, &scene.model, written)?;
+    let mut usd = match opts.format {
+        ExportFormat::Usd => Some(export_usd::UsdLayer::create(
+            &opts.out,
+            usda::LayerMeta {
+                default_prim: "wisptree".into(),
+                doc: format!(
+                    "wisptree {}: {} under {}, {} model",
+                    env!("CARGO_PKG_VERSION"),
+                    scene.style_name(),
+                    opts.motion,
+                    opts.model
+                ),
+                start: 0.0,
+                end: ((written - 1) * u64::from(opts.every)) as f64,
+                fps: 1.0 / scene.frame_dt(),
+            },
+            scene.model.clone(),
+            opts.debug_structure,
+        )?),
+        ExportFormat::Hair | ExportFormat::Tfx => {
+            std::fs::create_dir_all(&opts.out).map_err(|e| {
+                BadInput(format!(
+                    "--out {}: cannot create the folder: {e}",
+                    opts.out.display()
+                ))
+            })?;
+            None
+        }
+    };
     let bar = (progress && std::io::stderr().is_terminal()).then(|| {
         let bar = indicatif::ProgressBar::new(frames);
         bar.set_style(
@@ -108,7 +150,7 @@ pub fn export(opts: &ExportOptions, progress: bool) -> anyhow::Result<ExportSumm
         files: Vec::new(),
         strands: scene.model.strands.len(),
         points_per_strand: match opts.format {
-            ExportFormat::Hair => 0, // set from the first frame written
+            ExportFormat::Hair | ExportFormat::Usd => 0, // set from the first frame written
             ExportFormat::Tfx => tfx_write::TFX_VERTICES,
         },
         bytes: 0,
@@ -127,6 +169,14 @@ pub fn export(opts: &ExportOptions, progress: bool) -> anyhow::Result<ExportSumm
         }
         if index % u64::from(opts.every) == 0 {
             builder.fill(&mut *solver, &mut frame);
+            if let Some(layer) = &mut usd {
+                summary.points_per_strand = frame.strands.strand(0).len();
+                layer.frame(index, &frame, solver.pose())?;
+                if let Some(b) = &bar {
+                    b.inc(1);
+                }
+                continue;
+            }
             copy_strands(&frame, &mut strands);
             if opts.format == ExportFormat::Hair {
                 summary.points_per_strand = strands.first().map_or(0, Vec::len);
@@ -147,6 +197,10 @@ pub fn export(opts: &ExportOptions, progress: bool) -> anyhow::Result<ExportSumm
             b.inc(1);
         }
     }
+    if let Some(layer) = usd {
+        summary.bytes = layer.finish()?;
+        summary.files.push(opts.out.clone());
+    }
     if let Some(b) = bar {
         b.finish_and_clear();
     }
@@ -164,11 +218,31 @@ fn check_options(opts: &ExportOptions) -> Result<(), BadInput> {
     if opts.every == 0 {
         return Err(BadInput("--every must be at least 1".into()));
     }
-    if opts.out.exists() && !opts.out.is_dir() {
-        return Err(BadInput(format!(
-            "--out {}: exists and is not a folder",
-            opts.out.display()
-        )));
+    let out = opts.out.display();
+    if opts.format == ExportFormat::Usd {
+        if opts.out.is_dir() {
+            return Err(BadInput(format!(
+                "--out {out}: is a folder; --format usd writes one file, such as {}",
+                opts.out.join("hair.usda").display()
+            )));
+        }
+        let ext = opts.out.extension().and_then(|e| e.to_str());
+        if !matches!(ext, Some("usda" | "usd")) {
+            return Err(BadInput(format!(
+                "--out {out}: a USD layer written as text is named .usda (or .usd)"
+            )));
+        }
+    } else {
+        if opts.debug_structure {
+            return Err(BadInput(
+                "--debug-structure is for --format usd (the .hair and .tfx formats hold \
+                 strands only)"
+                    .into(),
+            ));
+        }
+        if opts.out.exists() && !opts.out.is_dir() {
+            return Err(BadInput(format!("--out {out}: exists and is not a folder")));
+        }
     }
     Ok(())
 }
@@ -183,22 +257,42 @@ fn copy_strands(frame: &Frame, out: &mut Vec<Vec<[f32; 3]>>) {
     }
 }
 
+/// Writes one frame's file under a temporary name beside `path`, then renames it: a failed
+/// write (a full disk) leaves nothing under `path`, and exits 2 naming it.
 fn write_frame(
     path: &Path,
     format: ExportFormat,
     strands: &[Vec<[f32; 3]>],
     info: &str,
-) -> anyhow::Result<()> {
+) -> Result<(), BadInput> {
+    let tmp = path.with_extension(format!("{}.tmp", format.extension()));
     let written = match format {
-        ExportFormat::Hair => hair_file::write_hair(path, strands, info),
-        ExportFormat::Tfx => tfx_write::write_tfx(path, strands),
-    };
-    written.map_err(|e| anyhow::anyhow!("{}: cannot write: {e}", path.display()))
+        ExportFormat::Hair => hair_file::write_hair(&tmp, strands, info),
+        ExportFormat::Tfx => tfx_write::write_tfx(&tmp, strands),
+        ExportFormat::Usd => unreachable!("one USD layer is written by export_usd"),
+    }
+    .and_then(|()| std::fs::rename(&tmp, path));
+    written.map_err(|e| {
+        let _ = std::fs::remove_file(&tmp);
+        BadInput(format!("{}: cannot write: {e}", path.display()))
+    })
 }
 
 /// `wisptree export`: runs and prints one summary line.
 pub fn run(opts: &ExportOptions, progress: bool) -> anyhow::Result<()> {
     let s = export(opts, progress)?;
+    if opts.format == ExportFormat::Usd {
+        println!(
+            "wrote {} frames ({} strands × {} points, {:.1} MB) of {} to {}",
+            s.frames.div_ceil(u64::from(opts.every)),
+            s.strands,
+            s.points_per_strand,
+            s.bytes as f64 / 1e6,
+            s.frames,
+            opts.out.display()
+        );
+        return Ok(());
+    }
     println!(
         "wrote {} {} files ({} strands × {} points, {:.1} MB) of {} frames to {}",
         s.files.len(),

@@ -16,11 +16,16 @@
 //! terminal      raw mode, restored on every way out
 //! stop          the one stop signal (Ctrl-C, q, the end)
 //! ```
+//!
+//! `export` writes `.hair` and `.tfx` files itself, and a USD layer through `export_usd` (the
+//! layer's prims) and `usda` (the text format); `export_space` checks the free space first.
 
 mod console;
 pub mod coverage;
 pub mod experiment;
 pub mod export;
+mod export_space;
+pub mod export_usd;
 pub mod keys;
 mod log_thread;
 pub mod reload;
@@ -35,6 +40,7 @@ pub mod sweep;
 pub mod sweep_plan;
 pub mod terminal;
 pub mod threads;
+pub mod usda;
 
 pub use run::{run, run_with, simulate_into, RunOptions, WebOptions};
 pub use sim_thread::{slow_motion_message, Load};

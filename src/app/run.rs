@@ -106,6 +106,10 @@ pub fn run(opts: RunOptions) -> anyhow::Result<()> {
 
 /// The whole command with an explicit stop signal (what Ctrl-C triggers in [`run`]).
 pub fn run_with(opts: RunOptions, stop: StopSignal) -> anyhow::Result<RunSummary> {
+    // A path no recording can be written to is refused before the style loads (one line).
+    if let sink::SinkChoice::Save(path) = &opts.sink {
+        sink::check_save_path(path)?;
+    }
     // Load first: a bad style must not leave an empty recording or a spawned viewer behind.
     let scene = Scene::load(&opts.style, &opts.motion, opts.model)?;
     let console = Console::default();

@@ -23,8 +23,9 @@ pub struct ExportArgs {
     /// File format.
     #[arg(long, value_enum, default_value_t = ExportFormat::Hair)]
     pub format: ExportFormat,
-    /// The folder the files are written to (created if needed).
-    #[arg(long, value_name = "DIR")]
+    /// The folder the files are written to (created if needed); for `usd`, the layer's file
+    /// (FILE.usda).
+    #[arg(long, value_name = "DIR|FILE")]
     pub out: PathBuf,
     /// Write every n-th frame only (frames 0, n, 2n, …).
     #[arg(long, value_name = "N", default_value_t = 1)]
@@ -32,6 +33,10 @@ pub struct ExportArgs {
     /// No progress bar.
     #[arg(long)]
     pub no_progress: bool,
+    /// `usd` only: also write the model's active nodes (Points) and segments (linear
+    /// BasisCurves) under /wisptree/structure, the AWT paper's Figure 4 display.
+    #[arg(long)]
+    pub debug_structure: bool,
 }
 
 impl ExportArgs {
@@ -45,6 +50,7 @@ impl ExportArgs {
             format: self.format,
             out: self.out.clone(),
             every: self.every,
+            debug_structure: self.debug_structure,
         }
     }
 }

@@ -55,7 +55,8 @@ pub enum Command {
     /// Reproduce the AWT paper's §5.2 timing table (single-level against AWT on the four paper
     /// styles under the `lean` motion), and time other solvers with --solvers.
     Bench(BenchArgs),
-    /// Simulate and write every n-th frame's strands as `.hair` or `.tfx` files.
+    /// Simulate and write every n-th frame's strands as `.hair` or `.tfx` files, or as one USD
+    /// layer (`.usda`).
     Export(ExportArgs),
     /// Simulate and write the rendered hair of every frame as PNG files.
     Render(RenderArgs),

@@ -5,6 +5,33 @@ use nalgebra::Vector3;
 
 use crate::style::{LoadedStyle, RawHair, StyleError};
 
+/// Strands shorter than this (m) are counted at load and reported: a stub of hair, or a
+/// root-only strand written with two nearly coincident points (a real TressFX style has some
+/// 7.5 µm long). They are kept, and simulated like any other strand.
+pub const SHORT_STRAND: f64 = 1e-3;
+
+/// How many strands are shorter than [`SHORT_STRAND`], as a note, with the shortest length.
+pub(super) fn short_strands_note(hair: &RawHair) -> Option<String> {
+    let lengths = hair.strands.iter().map(|st| {
+        st.points
+            .windows(2)
+            .map(|w| (Vector3::from(w[1]) - Vector3::from(w[0])).norm())
+            .sum::<f64>()
+    });
+    let (n, shortest) = lengths
+        .filter(|&l| l < SHORT_STRAND)
+        .fold((0usize, f64::INFINITY), |(n, m), l| (n + 1, m.min(l)));
+    (n > 0).then(|| {
+        format!(
+            "{n} of {} strands are shorter than {} mm (the shortest {:.1} µm); they are kept \
+             (a stub of hair, or a wrong scale?)",
+            hair.strands.len(),
+            SHORT_STRAND * 1e3,
+            shortest * 1e6
+        )
+    })
+}
+
 /// Coordinates beyond this many metres are a typo (or a unit error in an import), and their
 /// squares would overflow the clustering's distances.
 pub const MAX_COORDINATE: f64 = 1.0e3;

@@ -108,7 +108,7 @@ pub struct HairModel {
 impl HairModel {
     /// Loads the style's strands and builds the model.
     pub fn from_style(style: &LoadedStyle) -> Result<HairModel, StyleError> {
-        let hair = style.strands()?;
+        let mut hair = style.strands()?;
         if hair.strands.is_empty() {
             return Err(StyleError::Invalid {
                 path: style.path.clone(),
@@ -131,6 +131,7 @@ impl HairModel {
             });
         }
         check_strands(style, &hair)?;
+        hair.notes.extend(check::short_strands_note(&hair));
         Ok(Self::build(style, &hair))
     }
 
@@ -254,8 +255,8 @@ impl HairModel {
                 })
                 .fold(0.0, f64::max),
             link: s.link.clone(),
-            scalp_center: Vector3::from(s.head.scalp.center),
-            scalp_radii: Vector3::from(s.head.scalp.radii),
+            scalp_center: Vector3::from(style.scalp.center),
+            scalp_radii: Vector3::from(style.scalp.radii),
             body: style.body.clone(),
             notes: hair.notes.clone(),
         }

@@ -18,6 +18,12 @@ pub(super) const LEVEL_RAMP: [(u8, u8, u8); 6] = [
 
 /// The colour of `level` in a model with `levels` levels.
 pub fn level_color(level: u16, levels: u16) -> Rgba32 {
+    let (r, g, b) = level_rgb(level, levels);
+    Rgba32::from_rgb(r, g, b)
+}
+
+/// [`level_color`] as plain RGB, for writers that do not speak Rerun (the USD export).
+pub fn level_rgb(level: u16, levels: u16) -> (u8, u8, u8) {
     let last = LEVEL_RAMP.len() - 1;
     let idx = if levels <= 1 {
         0
@@ -26,8 +32,7 @@ pub fn level_color(level: u16, levels: u16) -> Rgba32 {
         // Round to the nearest ramp entry; exact ends for the coarsest and finest level.
         (l * last + (levels as usize - 1) / 2) / (levels as usize - 1)
     };
-    let (r, g, b) = LEVEL_RAMP[idx.min(last)];
-    Rgba32::from_rgb(r, g, b)
+    LEVEL_RAMP[idx.min(last)]
 }
 
 pub(super) const HAIR_COLOR: (u8, u8, u8) = (255, 205, 120);

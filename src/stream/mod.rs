@@ -29,6 +29,7 @@ pub use blueprint::{
     blueprint, send_blueprint, send_blueprint_with, spatial_view_blueprint_path, BlueprintCamera,
 };
 pub use colors::level_color;
+pub use colors::level_rgb;
 use colors::*;
 pub use paths::{TIMELINE_FRAME, TIMELINE_SIM_TIME};
 pub use runs_layout::{

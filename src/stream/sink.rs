@@ -224,7 +224,31 @@ fn connect(url: &str) -> anyhow::Result<(RecordingStream, Arc<GrpcSink>)> {
     Ok((rec, sink))
 }
 
+/// Refuses a `--save` path no recording can be written to (a folder, a path under a regular
+/// file, a place the user may not write) with one line naming it (exit 2), rather than the
+/// Rerun SDK's error, which repeats the system's three times. Leaves the file system as it was.
+pub fn check_save_path(path: &Path) -> Result<(), crate::error::BadInput> {
+    let existed = path.symlink_metadata().is_ok();
+    match std::fs::OpenOptions::new()
+        .append(true)
+        .create(true)
+        .open(path)
+    {
+        Ok(_) => {
+            if !existed {
+                let _ = std::fs::remove_file(path);
+            }
+            Ok(())
+        }
+        Err(e) => Err(crate::error::BadInput(format!(
+            "--save {}: cannot write: {e}",
+            path.display()
+        ))),
+    }
+}
+
 fn save(path: &Path) -> anyhow::Result<RecordingStream> {
+    check_save_path(path)?;
     rerun::RecordingStreamBuilder::new(APP_ID)
         .save(path)
         .with_context(|| format!("{}: cannot create the recording", path.display()))

@@ -37,7 +37,7 @@ pub fn append_strands(f: &StrandFile, strands: &[Vec<[f32; 3]>], hair: &mut RawH
 /// Share of the smallest root distance kept as the fitted sphere's radius: every root then lies
 /// just outside the sphere, so no strand starts in contact with the head (like the default
 /// head sphere, which sits a few millimetres inside the scalp).
-const FIT_SHRINK: f64 = 0.98;
+pub(super) const FIT_SHRINK: f64 = 0.98;
 
 /// The head sphere of a set of roots: the algebraic least-squares sphere through them (centre
 /// `c` and `d = r² − |c|²` solve the linear system `2 c·p + d = |p|²` over all roots, in

@@ -12,6 +12,7 @@ pub mod hairsalon;
 pub mod import;
 pub mod layered_section;
 pub mod render_params;
+pub mod scalp;
 pub mod schema;
 pub mod tfx;
 pub mod tfx_write;
@@ -102,6 +103,8 @@ pub struct LoadedStyle {
     pub style: Style,
     /// Collision spheres after resolving `TressFx.project`, if any (else `style.head.body`).
     pub body: Vec<Sphere>,
+    /// The scalp in force: `head.scalp`, else on the fitted head (`fit_body`), else the default.
+    pub scalp: Ellipsoid,
 }
 
 /// One strand before resampling: its top-level wisp and its polyline, root first.
@@ -169,10 +172,12 @@ pub fn parse(path: &Path, text: &str) -> Result<LoadedStyle, StyleError> {
             style.head.body.clone()
         }
     };
+    let scalp = style.head.scalp();
     let mut loaded = LoadedStyle {
         path: path.to_path_buf(),
         style,
         body,
+        scalp,
     };
     if loaded.style.head.fit_body {
         // The roots are only known once the strands are read (a second read, when the model is
@@ -185,6 +190,9 @@ pub fn parse(path: &Path, text: &str) -> Result<LoadedStyle, StyleError> {
             .collect();
         let sphere =
             import::fit_head_sphere(&roots).map_err(|msg| invalid("head.fit_body", msg))?;
+        if loaded.style.head.scalp.is_none() {
+            loaded.scalp = scalp::fitted_scalp(&sphere);
+        }
         loaded.body = vec![sphere];
     }
     Ok(loaded)
@@ -371,8 +379,9 @@ pub fn validate(style: &Style) -> Result<(), Invalid> {
 /// The head: scalp and collision spheres.
 fn validate_head(style: &Style) -> Result<(), Invalid> {
     let h = &style.head;
-    finite3(&h.scalp.center, "head.scalp.center")?;
-    for (a, r) in h.scalp.radii.iter().enumerate() {
+    let scalp = h.scalp();
+    finite3(&scalp.center, "head.scalp.center")?;
+    for (a, r) in scalp.radii.iter().enumerate() {
         positive(*r, &format!("head.scalp.radii[{a}]"))?;
     }
     for (n, s) in h.body.iter().enumerate() {

@@ -57,10 +57,15 @@ fn default_seed() -> u64 {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Head {
-    /// The scalp, on which generated roots are placed. Default: centre (0, 1.6, 0),
-    /// radii (0.075, 0.095, 0.09) m.
-    #[serde(default = "default_scalp")]
-    pub scalp: Ellipsoid,
+    /// The scalp, on which generated roots are placed (the motion's pivot, the viewer's head).
+    /// Default: with `fit_body`, a sphere on the fitted head; else centre (0, 1.6, 0), radii
+    /// (0.075, 0.095, 0.09) m. [`Head::scalp`] gives the one in force.
+    #[serde(
+        default,
+        with = "super::scalp::given",
+        skip_serializing_if = "Option::is_none"
+    )]
+    pub scalp: Option<Ellipsoid>,
     /// Collision spheres of the head and body, moving with the character.
     /// Default: a head sphere just inside the scalp, a neck and two shoulders/torso spheres.
     #[serde(default = "default_body")]
@@ -75,14 +80,14 @@ pub struct Head {
 impl Default for Head {
     fn default() -> Self {
         Head {
-            scalp: default_scalp(),
+            scalp: None,
             body: default_body(),
             fit_body: false,
         }
     }
 }
 
-fn default_scalp() -> Ellipsoid {
+pub(super) fn default_scalp() -> Ellipsoid {
     Ellipsoid {
         center: [0.0, 1.6, 0.0],
         radii: [0.075, 0.095, 0.09],

@@ -51,9 +51,10 @@ pub fn generate(style: &Style, g: &Generated) -> Result<RawHair, Invalid> {
                 "the product of the branching factors overflows".to_string(),
             )
         })?;
+    let scalp = style.head.scalp();
     let mut grower = Generator {
         seed: style.seed,
-        scalp: &style.head.scalp,
+        scalp: &scalp,
         body: &style.head.body,
         samples: g.samples,
         min_per_tile,
