@@ -84,6 +84,44 @@ fn inspect_json_on_the_paper_styles() {
     }
 }
 
+/// `inspect --json`'s `model_hash` fingerprints the hair built: a copy of a built-in style's
+/// file gives the built-in's hash, a copy with one key-strand coordinate nudged does not, and
+/// the hash is the same run after run.
+#[test]
+fn inspect_model_hash_follows_the_strand_points() {
+    let hash = |style: &str| {
+        let (code, out, err) = wisptree(&["inspect", style, "--json"]);
+        assert_eq!(code, 0, "{style}: {err}");
+        let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+        let h = v["model_hash"].as_str().unwrap().to_owned();
+        assert_eq!(h.len(), 16, "{h}");
+        h
+    };
+    let builtin = hash("short");
+    assert_eq!(builtin, hash("short"), "the same style twice");
+    let dir = tempfile::tempdir().unwrap();
+    let text = std::fs::read_to_string(root().join("styles/short.ron")).unwrap();
+    let copy = write(dir.path(), "copy.ron", &text);
+    assert_eq!(
+        hash(&copy),
+        builtin,
+        "a copy of the file builds the same hair"
+    );
+    let first = text
+        .find("key_strand: [(")
+        .expect("short.ron has key strands")
+        + 14;
+    let end = first + text[first..].find(',').unwrap();
+    let x: f64 = text[first..end].trim().parse().unwrap();
+    let nudged = format!("{}{}{}", &text[..first], x + 0.001, &text[end..]);
+    let moved = write(dir.path(), "moved.ron", &nudged);
+    assert_ne!(
+        hash(&moved),
+        builtin,
+        "one key-strand coordinate moved by 1 mm"
+    );
+}
+
 /// `inspect --coverage` prints one line per view, and those four percentages are the only
 /// numbers followed by `%`; `--json` gives the same numbers; `--images` writes the four maps.
 #[test]

@@ -42,6 +42,8 @@ pub struct ModelSummary {
     pub max_strand_length_m: f64,
     pub link: String,
     pub trees: usize,
+    /// [`HairModel::point_hash`] as 16 hex digits: equal for styles that build the same hair.
+    pub model_hash: String,
 }
 
 /// The numbers `inspect` prints.
@@ -63,6 +65,7 @@ pub fn summarize(loaded: &style::LoadedStyle, m: &HairModel) -> ModelSummary {
             Link::Spring { .. } => "spring".into(),
         },
         trees: m.levels[0].gc_count(),
+        model_hash: format!("{:016x}", m.point_hash()),
     }
 }
 
@@ -105,6 +108,7 @@ pub fn inspect(a: &InspectArgs) -> anyhow::Result<()> {
     println!("K            {} cross-sections per GC", s.cross_sections);
     println!("longest      {:.3} m", s.max_strand_length_m);
     println!("link         {}", s.link);
+    println!("model hash   {} (every strand point at rest)", s.model_hash);
     Ok(())
 }
 

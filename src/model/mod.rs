@@ -292,6 +292,28 @@ impl HairModel {
         self.levels[l].gc_count() * self.k
     }
 
+    /// A fingerprint of the hair as built: 64-bit FNV-1a over K, the strand count and the bits
+    /// of every strand point at rest. Two styles that build the same hair, bit for bit, have the
+    /// same hash (a saved edit against its source, for instance); FNV-1a is stable across
+    /// machines and Rust versions, which std's hasher does not promise.
+    pub fn point_hash(&self) -> u64 {
+        let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+        let mut eat = |x: u64| {
+            for b in x.to_le_bytes() {
+                h ^= u64::from(b);
+                h = h.wrapping_mul(0x0000_0100_0000_01b3);
+            }
+        };
+        eat(self.k as u64);
+        eat(self.strands.len() as u64);
+        for p in &self.strands.rest {
+            eat(p.x.to_bits());
+            eat(p.y.to_bits());
+            eat(p.z.to_bits());
+        }
+        h
+    }
+
     /// Smallest and largest node radius over all levels.
     pub fn radius_range(&self) -> (f64, f64) {
         self.levels
