@@ -48,6 +48,7 @@ fn args(style: &Path, out: &Path, seconds: f64, watch: bool) -> RunOptions {
         sink: SinkChoice::Save(out.to_path_buf()),
         render: None,
         web: None,
+        inspect: None,
     }
 }
 

@@ -22,6 +22,7 @@
 //!   [`StopSignal`]: the simulation thread stops and drops its sender, the logger logs what is
 //!   queued, flushes and ends. A recording stopped this way is a complete, valid `.rrd`.
 
+use crate::error::BadInput;
 use crate::scene::Scene;
 use crate::solver::SolverKind;
 use crate::stream::sink::{self, SinkChoice};
@@ -66,6 +67,8 @@ pub struct RunOptions {
     /// Serve the control page and the web viewer (`--web`); the sink is then
     /// [`SinkChoice::Web`].
     pub web: Option<WebOptions>,
+    /// The node whose numbers are logged every frame (`--inspect`).
+    pub inspect: Option<crate::solver::NodeId>,
 }
 
 /// `--web [--port P] [--bind IP] [--open]`.
@@ -91,6 +94,7 @@ impl Default for RunOptions {
             sink: SinkChoice::Auto,
             render: Some(super::render_thread::DEFAULT_RENDER_SIZE),
             web: None,
+            inspect: None,
         }
     }
 }
@@ -112,6 +116,17 @@ pub fn run_with(opts: RunOptions, stop: StopSignal) -> anyhow::Result<RunSummary
     }
     // Load first: a bad style must not leave an empty recording or a spawned viewer behind.
     let scene = Scene::load(&opts.style, &opts.motion, opts.model)?;
+    if let Some(node) = &opts.inspect {
+        if !matches!(opts.model, SolverKind::Awt | SolverKind::SingleLevel) {
+            return Err(BadInput(format!(
+                "--inspect: the {} model has no node inspector yet (the AWT has)",
+                opts.model.name()
+            ))
+            .into());
+        }
+        crate::solver::awt::inspect::resolve(&scene.model, node)
+            .map_err(|e| BadInput(format!("--inspect {}: {e}", node.path().replace('/', ":"))))?;
+    }
     let console = Console::default();
     for n in &scene.model.notes {
         console.say(&format!("wisptree: note: {n}"));
@@ -153,6 +168,7 @@ pub fn run_with(opts: RunOptions, stop: StopSignal) -> anyhow::Result<RunSummary
         render_skips_when_behind: sink.live,
         quiet: false,
         web,
+        inspect: opts.inspect,
     };
     let file = sink.file.clone();
     let summary = simulate(&scene, sink, &loop_opts, &stop)?;

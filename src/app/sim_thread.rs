@@ -116,6 +116,8 @@ pub struct SimThread {
     /// Tunable values set on the control pages (checked there against the table published
     /// in `shared`).
     pub tunes: Option<Receiver<SetTunable>>,
+    /// The node whose numbers each frame carries (`run --inspect`).
+    pub inspect: Option<crate::solver::NodeId>,
 }
 
 /// The state of the loop that a control message may change.
@@ -132,6 +134,8 @@ struct LoopState {
     meter: RealtimeMeter,
     /// Whether this scene's run already said it fell below real time.
     said_slow: bool,
+    /// The inspected node (`run --inspect`).
+    inspect: Option<crate::solver::NodeId>,
 }
 
 impl SimThread {
@@ -149,6 +153,7 @@ impl SimThread {
             out: SimOutcome::default(),
             meter: RealtimeMeter::new(),
             said_slow: false,
+            inspect: self.inspect,
         };
         say_ignored(&*st.solver, console, &mut st.messages);
         let mut report = st.solver.new_report();
@@ -389,6 +394,16 @@ fn make_frame(
         .frame_done(st.solver.dt() * st.solver.steps_per_frame() as f64);
     st.out.load.add(f, st.solver.steps_per_frame());
     pipeline::fill_stats(f, st.solver.tunables(), &st.solver.tuning());
+    if let Some(node) = &st.inspect {
+        let (path, values) = f.inspect.get_or_insert_with(Default::default);
+        path.clear();
+        path.push_str(&node.path());
+        // A node the model lost (a restart on another model) logs nothing more; `run` checked
+        // the node against the model it started with.
+        if st.solver.inspect(node, values).is_err() {
+            f.inspect = None;
+        }
+    }
     st.out.splits += f.splits as u64;
     st.out.merges += f.merges as u64;
     st.out.sim_time = f.sim_time;

@@ -59,6 +59,8 @@ pub struct LoopOptions {
     pub quiet: bool,
     /// The control page's requests and the state it shows (`run --web`).
     pub web: Option<WebLink>,
+    /// The node whose numbers each frame carries (`run --inspect`).
+    pub inspect: Option<crate::solver::NodeId>,
 }
 
 /// What connects a run to its control page.
@@ -263,6 +265,7 @@ fn start_workers(
         free: free_rx,
         shared: opts.web.as_ref().map(|w| Arc::clone(&w.shared)),
         tunes: opts.web.as_ref().map(|w| w.tunes.clone()),
+        inspect: opts.inspect,
     };
     let sim = {
         let stop = stop.clone();

@@ -235,6 +235,7 @@ fn run_case(
         render_skips_when_behind: true,
         quiet: true,
         web: None,
+        inspect: None,
     };
     let t0 = Instant::now();
     let summary = simulate_into(&scene, rec, &opts, &StopSignal::new())?;

@@ -58,6 +58,13 @@ pub struct RunArgs {
     #[arg(long, value_name = "WxH", default_value = "640x480", value_parser = parse_size)]
     pub render_size: (u32, u32),
 
+    /// Ask one AWT node why it split or has not merged: log, every frame, its split test
+    /// (|a|·r against the threshold, whether it may split) and its merge test against its
+    /// siblings under `/inspect/TREE/LEVEL/INDEX/<name>`. INDEX counts the tree's nodes of that
+    /// level, GC by GC, root to tip (`0:1:12`)
+    #[arg(long, value_name = "TREE:LEVEL:INDEX", value_parser = crate::solver::NodeId::parse)]
+    pub inspect: Option<crate::solver::NodeId>,
+
     /// Where the recording goes.
     #[command(flatten)]
     pub sink: SinkArgs,
@@ -115,6 +122,7 @@ impl RunArgs {
                 self.sink.choice()
             },
             render: (!self.no_render).then_some(self.render_size),
+            inspect: self.inspect,
             web: self.web.web.then_some(WebOptions {
                 bind: self.web.bind,
                 port: self.web.port,

@@ -187,6 +187,9 @@ pub struct Frame {
     /// stats, and the pipeline's (step time, dropped frames, parameters). The logger, the bench
     /// and the JSON all read this list.
     pub stats: Vec<Stat>,
+    /// The inspected node (`run --inspect`): its path under `/inspect` (`tree/level/index`)
+    /// and its numbers by name; `None` when no node is inspected.
+    pub inspect: Option<(String, Vec<(&'static str, f64)>)>,
     /// The solver's own stats of this frame, aggregated over its steps (part of `stats`).
     pub solver_stats: Vec<Stat>,
     /// Every strand of the model, smoothed as for display: the renderer's input (empty when

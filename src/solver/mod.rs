@@ -33,6 +33,7 @@ use tunable::{Tunable, Tuning};
 pub mod awt;
 
 pub use crate::report::{AdaptEvent, Aggregate, Counters, EventKind, Stat, StepReport};
+pub use awt::inspect::NodeId;
 
 /// Which hair model a run simulates (`--model`, `bench --solvers`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
@@ -283,5 +284,16 @@ pub trait Solver: Send {
     /// Bytes held by reused step buffers (for the allocation checks); 0 if not tracked.
     fn reserved_bytes(&self) -> usize {
         0
+    }
+
+    /// The numbers behind node `node`'s adaptation after the last step, by name (the AWT:
+    /// [`awt::inspect::INSPECT_NAMES`]); `Err` says why there are none (no such node, or a
+    /// model without an inspector).
+    fn inspect(&self, node: &NodeId, out: &mut Vec<(&'static str, f64)>) -> Result<(), String> {
+        let _ = (node, out);
+        Err(format!(
+            "the {} model has no node inspector yet (the AWT has)",
+            self.kind().name()
+        ))
     }
 }

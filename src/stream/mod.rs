@@ -266,6 +266,7 @@ impl Logger {
         self.log_body(frame)?;
         self.log_events(frame)?;
         self.log_stats(frame)?;
+        self.log_inspect(frame)?;
         if let Some(img) = &frame.image {
             let path = self.paths.named(paths::RENDER).clone();
             self.rec.log(
@@ -423,6 +424,20 @@ impl Logger {
                 self.rec.log(path, &Points3D::clear_fields())?;
                 *shown = false;
             }
+        }
+        Ok(())
+    }
+
+    /// The inspected node's numbers (`run --inspect`), each its own scalar at
+    /// `/inspect/<tree>/<level>/<index>/<name>`, so that a recording made with a node selected
+    /// can be reviewed later.
+    fn log_inspect(&mut self, frame: &Frame) -> anyhow::Result<()> {
+        let Some((node, values)) = &frame.inspect else {
+            return Ok(());
+        };
+        for (name, v) in values {
+            let path = format!("{}{}/{node}/{name}", self.paths.prefix, paths::INSPECT);
+            self.rec.log(path, &Scalars::single(*v))?;
         }
         Ok(())
     }

@@ -27,6 +27,8 @@ pub fn stat_path(group: StatGroup, name: &str) -> String {
 pub const NODES: &str = "/hair/awt/nodes";
 /// The AWT's active segments.
 pub const SEGMENTS: &str = "/hair/awt/segments";
+/// The inspected node's numbers (`run --inspect`): `/inspect/<tree>/<level>/<index>/<name>`.
+pub const INSPECT: &str = "/inspect";
 /// The drawn hair strands.
 pub const STRANDS: &str = "/hair/strands";
 /// The body's collision spheres.

@@ -111,4 +111,12 @@ impl Solver for Simulation {
     fn reserved_bytes(&self) -> usize {
         Simulation::reserved_bytes(self)
     }
+
+    fn inspect(
+        &self,
+        node: &super::inspect::NodeId,
+        out: &mut Vec<(&'static str, f64)>,
+    ) -> Result<(), String> {
+        Simulation::inspect(self, node, out)
+    }
 }

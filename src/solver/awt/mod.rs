@@ -17,6 +17,7 @@ mod as_solver;
 pub mod collide;
 pub mod dynamics;
 pub mod forest;
+pub mod inspect;
 mod slots;
 mod step;
 pub mod tunables;

@@ -1,0 +1,197 @@
+//! The node inspector (`run --inspect TREE:LEVEL:INDEX`): the split test's numbers of a node
+//! that splits in a scripted run, checked against the event log, and the recording's copy of
+//! them.
+
+#[path = "common/rrd.rs"]
+mod rrd;
+
+use std::process::Command;
+
+use wisptree::model::HairModel;
+use wisptree::scene::Scene;
+use wisptree::solver::{AdaptEvent, EventKind, NodeId, SolverKind};
+
+const STYLE: &str = "short";
+const MOTION: &str = "shake";
+const FRAMES: usize = 40;
+
+/// The user's name of the node an event is about.
+fn node_of(m: &HairModel, e: &AdaptEvent) -> NodeId {
+    let l = e.level as usize;
+    let lv = &m.levels[l];
+    let local = (0..e.gc as usize).filter(|&g| lv.tree[g] == e.tree).count();
+    NodeId {
+        tree: e.tree,
+        level: l,
+        index: local * m.k + e.cross_section as usize,
+    }
+}
+
+/// Each frame's events, stepping as `run` does.
+fn events_per_frame(scene: &Scene) -> Vec<Vec<AdaptEvent>> {
+    let mut s = scene.solver();
+    let mut r = s.new_report();
+    (0..FRAMES)
+        .map(|_| {
+            let mut evs = Vec::new();
+            for _ in 0..s.steps_per_frame() {
+                s.step(&mut r);
+                evs.extend(r.events.iter().cloned());
+            }
+            evs
+        })
+        .collect()
+}
+
+/// Each frame's inspected numbers of `id`, by name.
+fn inspected(scene: &Scene, id: &NodeId) -> Vec<Vec<(&'static str, f64)>> {
+    let mut s = scene.solver();
+    let mut r = s.new_report();
+    (0..FRAMES)
+        .map(|_| {
+            for _ in 0..s.steps_per_frame() {
+                s.step(&mut r);
+            }
+            let mut v = Vec::new();
+            s.inspect(id, &mut v).unwrap();
+            v
+        })
+        .collect()
+}
+
+fn get(v: &[(&'static str, f64)], name: &str) -> f64 {
+    v.iter()
+        .find(|(n, _)| *n == name)
+        .unwrap_or_else(|| panic!("no {name}"))
+        .1
+}
+
+#[test]
+fn the_inspected_accel_radius_crosses_the_threshold_at_the_frame_of_the_split() {
+    let scene = Scene::load(STYLE, MOTION, SolverKind::Awt).unwrap();
+    let frames = events_per_frame(&scene);
+    // The first split, after a few frames, of a node that is alone in its frame's events (so
+    // the frame ends with it split).
+    let (f, ev) = frames
+        .iter()
+        .enumerate()
+        .skip(3)
+        .flat_map(|(f, evs)| evs.iter().map(move |e| (f, e)))
+        .find(|(f, e)| {
+            e.kind == EventKind::Split
+                && frames[*f]
+                    .iter()
+                    .filter(|o| o.level == e.level && o.gc == e.gc)
+                    .count()
+                    == 1
+        })
+        .expect("short under shake splits within 40 frames");
+    let id = node_of(&scene.model, ev);
+    let log = inspected(&scene, &id);
+    let threshold = get(&log[f], "split_threshold_in_force");
+    assert!(ev.accel_radius > threshold, "{ev:?}");
+    // At the frame of the split the node is no longer active and shows the a·r that split it.
+    assert_eq!(get(&log[f], "active"), 0.0, "{id:?} at frame {f}");
+    assert_eq!(
+        get(&log[f], "accel_radius"),
+        ev.accel_radius,
+        "{id:?} at frame {f}"
+    );
+    // Before it, while active, it was at or under the threshold at least once: it crossed.
+    let under =
+        (0..f).any(|g| get(&log[g], "active") == 1.0 && get(&log[g], "accel_radius") <= threshold);
+    assert!(under, "{id:?}: never under the threshold before frame {f}");
+    // The frame before the split, it was under the threshold or not allowed to split yet.
+    let before = &log[f - 1];
+    assert!(
+        get(before, "accel_radius") <= threshold || get(before, "may_split") == 0.0,
+        "{id:?} at frame {}: {before:?}",
+        f - 1
+    );
+    // Every frame, the numbers are finite and the node's GC and cross-section are the event's.
+    for v in &log {
+        assert!(v.iter().all(|(_, x)| x.is_finite()), "{v:?}");
+        assert_eq!(get(v, "gc"), ev.gc as f64);
+        assert_eq!(get(v, "cross_section"), ev.cross_section as f64);
+    }
+
+    // The recording of `run --inspect` holds the same numbers, frame by frame.
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("inspect.rrd");
+    let spec = format!("{}:{}:{}", id.tree, id.level, id.index);
+    let seconds = format!("{}", FRAMES as f64 * scene.frame_dt());
+    let o = Command::new(env!("CARGO_BIN_EXE_wisptree"))
+        .args(["run", "--style", STYLE, "--motion", MOTION, "--no-render"])
+        .args(["--seconds", &seconds, "--inspect", &spec, "--save"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let chunks = rrd::decode_file(&out);
+    let path = format!("/inspect/{}/accel_radius", id.path());
+    let series = rrd::scalars(&chunks, &path);
+    assert_eq!(series.len(), FRAMES, "{path}");
+    for (frame, v) in series {
+        assert_eq!(
+            v,
+            get(&log[frame as usize], "accel_radius"),
+            "frame {frame}"
+        );
+    }
+    assert_eq!(
+        rrd::scalars(&chunks, &format!("/inspect/{}/active", id.path())).len(),
+        FRAMES
+    );
+}
+
+#[test]
+fn bad_inspect_requests_exit_2_naming_the_node() {
+    let run = |args: &[&str]| {
+        let o = Command::new(env!("CARGO_BIN_EXE_wisptree"))
+            .args([
+                "run",
+                "--style",
+                "short",
+                "--seconds",
+                "0.1",
+                "--no-render",
+                "-o",
+            ])
+            .args(args)
+            .output()
+            .unwrap();
+        (
+            o.status.code(),
+            String::from_utf8_lossy(&o.stderr).into_owned(),
+        )
+    };
+    let (code, err) = run(&["--inspect", "0:9:0"]);
+    assert_eq!(code, Some(2), "{err}");
+    assert!(err.contains("level 9 does not exist"), "{err}");
+    let (code, err) = run(&["--inspect", "0:0:100000"]);
+    assert_eq!(code, Some(2), "{err}");
+    assert!(err.contains("index 100000 does not exist"), "{err}");
+    let (code, err) = run(&["--inspect", "one:0:0"]);
+    assert_eq!(code, Some(2), "{err}");
+    assert!(err.contains("TREE"), "{err}");
+    let (code, err) = run(&["--inspect", "0:0:0", "--model", "layered"]);
+    assert_eq!(code, Some(2), "{err}");
+    assert!(err.contains("no node inspector"), "{err}");
+}
+
+#[test]
+fn node_ids_parse_and_name_their_path() {
+    let id = NodeId::parse("3:1:42").unwrap();
+    assert_eq!(
+        id,
+        NodeId {
+            tree: 3,
+            level: 1,
+            index: 42
+        }
+    );
+    assert_eq!(id.path(), "3/1/42");
+    for bad in ["", "1:2", "1:2:3:4", "-1:0:0", "a:b:c", "1.5:0:0"] {
+        assert!(NodeId::parse(bad).is_err(), "{bad}");
+    }
+}
