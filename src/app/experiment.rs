@@ -8,7 +8,8 @@ use anyhow::Context as _;
 
 use super::runs_log::RunLog;
 use crate::error::BadInput;
-use crate::experiment::{self, ExperimentOptions, ExperimentReport, FrameSink};
+use crate::experiment::{self, ExperimentOptions, ExperimentReport, FrameExtras, FrameSink};
+use crate::render::Image;
 use crate::report::AdaptEvent;
 use crate::solver::Solver;
 use crate::stream::sink::{open_sink, Recording, SinkChoice};
@@ -27,12 +28,24 @@ pub struct ExperimentCommand {
     pub save: Option<PathBuf>,
     /// Write the numbers as JSON here.
     pub json: Option<PathBuf>,
+    /// Write the pictures the experiment makes (`awt-fig7`'s contact sheet) into this folder.
+    pub pictures: Option<PathBuf>,
 }
 
 /// Logs every run's frames into one recording, each under `/runs/<label>`.
 struct RecordingSink {
     rec: Recording,
     runs: Vec<RunLog>,
+    /// The labels of the runs that logged a rendered frame (their cells show it).
+    rendered: Vec<String>,
+    pictures: PictureSink,
+}
+
+impl RecordingSink {
+    /// The layout's view of run `l`.
+    fn view(&self, l: &RunLog) -> crate::stream::RunView {
+        l.view(self.rendered.contains(&l.label))
+    }
 }
 
 impl FrameSink for RecordingSink {
@@ -42,6 +55,29 @@ impl FrameSink for RecordingSink {
         solver: &mut dyn Solver,
         events: &[AdaptEvent],
     ) -> anyhow::Result<()> {
+        self.frame_with(label, solver, events, FrameExtras::default())
+    }
+
+    fn wants_images(&self) -> bool {
+        true
+    }
+
+    fn picture(&mut self, name: &str, image: &Image) -> anyhow::Result<()> {
+        self.pictures.picture(name, image)
+    }
+
+    fn frame_with(
+        &mut self,
+        label: &str,
+        solver: &mut dyn Solver,
+        events: &[AdaptEvent],
+        extras: FrameExtras<'_>,
+    ) -> anyhow::Result<()> {
+        if extras.image.is_some() && !self.rendered.iter().any(|l| l == label) {
+            self.rendered.push(label.to_owned());
+            let views: Vec<_> = self.runs.iter().map(|l| self.view(l)).collect();
+            super::runs_log::send_layout(&self.rec, &views, None)?;
+        }
         let i = match self.runs.iter().position(|r| r.label == label) {
             Some(i) => i,
             None => {
@@ -60,7 +96,7 @@ impl FrameSink for RecordingSink {
                 // The layout so far, at once: a viewer opening the file (or still loading it)
                 // shows the runs' views rather than its own guess; the last one sent, after
                 // the last run, has them all.
-                let views: Vec<_> = self.runs.iter().map(|l| l.view(false)).collect();
+                let views: Vec<_> = self.runs.iter().map(|l| self.view(l)).collect();
                 super::runs_log::send_layout(&self.rec, &views, None)?;
                 slot
             }
@@ -68,7 +104,72 @@ impl FrameSink for RecordingSink {
         let r = &mut self.runs[i];
         r.frame.events.clear();
         r.frame.events.extend_from_slice(events);
+        if let Some(c) = extras.counters {
+            r.frame.counters.clone_from(c);
+        }
+        r.frame.image = extras.image.map(|img| crate::frame::EncodedImage {
+            jpeg: crate::render::encode_jpeg(img, super::render_thread::JPEG_QUALITY),
+            width: img.width,
+            height: img.height,
+        });
         r.log(solver)
+    }
+}
+
+/// Writes an experiment's pictures as `<folder>/<name>.png` (a file already there is kept as
+/// `<name>.png.bak`), or, without a folder, says once how to get them.
+pub struct PictureSink {
+    /// The folder (`--pictures`).
+    pub folder: Option<PathBuf>,
+    /// The files written.
+    pub written: Vec<PathBuf>,
+    told: bool,
+}
+
+impl PictureSink {
+    /// Pictures into `folder`, created if needed; `None`: a note on stderr instead.
+    pub fn new(folder: Option<PathBuf>) -> PictureSink {
+        PictureSink {
+            folder,
+            written: Vec::new(),
+            told: false,
+        }
+    }
+
+    /// Writes `image` as `name.png`.
+    pub fn picture(&mut self, name: &str, image: &Image) -> anyhow::Result<()> {
+        let Some(dir) = &self.folder else {
+            if !self.told {
+                eprintln!("wisptree: this experiment makes a picture ({name}.png): --pictures DIR writes it");
+                self.told = true;
+            }
+            return Ok(());
+        };
+        std::fs::create_dir_all(dir).map_err(|e| {
+            BadInput(format!("--pictures {}: cannot create the folder: {e}", dir.display()))
+        })?;
+        let path = dir.join(format!("{name}.png"));
+        if let Some(bak) = super::backup::move_aside(&path).context("--pictures")? {
+            eprintln!("kept the earlier {} as {}", path.display(), bak.display());
+        }
+        crate::render::write_png(image, &path)
+            .map_err(|e| BadInput(format!("--pictures: cannot write {}: {e}", path.display())))?;
+        eprintln!("wrote {}", path.display());
+        self.written.push(path);
+        Ok(())
+    }
+}
+
+/// A sink for runs without a recording: drops the frames, keeps the pictures.
+struct PicturesOnly(PictureSink);
+
+impl FrameSink for PicturesOnly {
+    fn frame(&mut self, _: &str, _: &mut dyn Solver, _: &[AdaptEvent]) -> anyhow::Result<()> {
+        Ok(())
+    }
+
+    fn picture(&mut self, name: &str, image: &Image) -> anyhow::Result<()> {
+        self.0.picture(name, image)
     }
 }
 
@@ -92,6 +193,12 @@ pub fn run(cmd: &ExperimentCommand) -> anyhow::Result<()> {
             all.iter().map(|e| e.name).collect::<Vec<_>>().join(", ")
         ))
     })?;
+    if let Some(dir) = &cmd.pictures {
+        // Before the runs: a bad folder is refused at once, not after minutes of simulation.
+        std::fs::create_dir_all(dir).map_err(|e| {
+            BadInput(format!("--pictures {}: cannot create the folder: {e}", dir.display()))
+        })?;
+    }
     let opts = ExperimentOptions::default();
     let runs = match &cmd.save {
         Some(path) => {
@@ -99,13 +206,15 @@ pub fn run(cmd: &ExperimentCommand) -> anyhow::Result<()> {
             let mut sink = RecordingSink {
                 rec: rec.clone(),
                 runs: Vec::new(),
+                rendered: Vec::new(),
+                pictures: PictureSink::new(cmd.pictures.clone()),
             };
             let runs = (def.run)(&opts, &mut sink)?;
             // In the experiment's order; a run that logged no frame has no view.
             let views: Vec<_> = runs
                 .iter()
                 .filter_map(|r| sink.runs.iter().find(|l| l.label == r.label))
-                .map(|l| l.view(false))
+                .map(|l| sink.view(l))
                 .collect();
             super::runs_log::send_layout(&rec, &views, None)?;
             for r in &sink.runs {
@@ -114,7 +223,7 @@ pub fn run(cmd: &ExperimentCommand) -> anyhow::Result<()> {
             eprintln!("wrote {}", path.display());
             runs
         }
-        None => (def.run)(&opts, &mut experiment::NoFrames)?,
+        None => (def.run)(&opts, &mut PicturesOnly(PictureSink::new(cmd.pictures.clone())))?,
     };
     let report = ExperimentReport {
         experiment: def.name.to_owned(),

@@ -17,9 +17,13 @@
 //! stop          the one stop signal (Ctrl-C, q, the end)
 //! ```
 
+pub mod backup;
 mod console;
 pub mod experiment;
 pub mod export;
+pub mod gallery;
+mod gallery_out;
+mod gallery_page;
 pub mod keys;
 mod log_thread;
 pub mod reload;

@@ -19,6 +19,10 @@ pub struct ExperimentArgs {
     /// Write the numbers as JSON to FILE: `{"experiment": NAME, "runs": [{"label": .., ..}]}`.
     #[arg(long, value_name = "FILE")]
     pub json: Option<PathBuf>,
+    /// Write the pictures the experiment makes (awt-fig7's contact sheet) as PNGs into DIR
+    /// (created if needed; a file already there is kept as NAME.png.bak).
+    #[arg(long, value_name = "DIR")]
+    pub pictures: Option<PathBuf>,
 }
 
 impl ExperimentArgs {
@@ -29,6 +33,7 @@ impl ExperimentArgs {
             list: self.list,
             save: self.save.clone(),
             json: self.json.clone(),
+            pictures: self.pictures.clone(),
         }
     }
 }

@@ -7,11 +7,14 @@
 //! never name Rerun.
 
 pub mod awt_fig5;
+pub mod awt_fig7;
 pub mod chang;
 pub mod chang_fig6;
 pub mod chang_fig7;
 pub mod plante;
 
+use crate::render::Image;
+use crate::report::Counters;
 use crate::solver::{AdaptEvent, Solver};
 
 /// Where an experiment's frames go.
@@ -24,6 +27,43 @@ pub trait FrameSink {
         solver: &mut dyn Solver,
         events: &[AdaptEvent],
     ) -> anyhow::Result<()>;
+
+    /// [`FrameSink::frame`] with what an experiment may know besides: the counters of the
+    /// frame's last step (active nodes per level, plotted per run) and the frame's rendered
+    /// image (shown beside the run's 3D view). A sink that has no use for them keeps the
+    /// default, which drops them.
+    fn frame_with(
+        &mut self,
+        label: &str,
+        solver: &mut dyn Solver,
+        events: &[AdaptEvent],
+        extras: FrameExtras<'_>,
+    ) -> anyhow::Result<()> {
+        let _ = extras;
+        self.frame(label, solver, events)
+    }
+
+    /// Whether the sink shows rendered frames: an experiment that can render its runs renders
+    /// every frame only when asked, since rendering costs more than its simulation.
+    fn wants_images(&self) -> bool {
+        false
+    }
+
+    /// A picture the experiment made of itself (a contact sheet), by a file-name stem
+    /// (`awt_fig7`). The default drops it.
+    fn picture(&mut self, name: &str, image: &Image) -> anyhow::Result<()> {
+        let _ = (name, image);
+        Ok(())
+    }
+}
+
+/// What [`FrameSink::frame_with`] carries besides the solver and the events.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct FrameExtras<'a> {
+    /// The counters of the frame's last step (from [`crate::pipeline::step_frame`]).
+    pub counters: Option<&'a Counters>,
+    /// The frame rendered, if the experiment rendered it.
+    pub image: Option<&'a Image>,
 }
 
 /// A sink that drops every frame (tests, `--json` without `--save`).
@@ -88,6 +128,7 @@ pub fn all() -> Vec<&'static ExperimentDef> {
         &plante::PLANTE_FIG8,
         &plante::PLANTE_FIG9,
         &awt_fig5::AWT_FIG5,
+        &awt_fig7::AWT_FIG7,
         &chang::CHANG_SHAKE,
         &chang_fig6::CHANG_FIG6,
         &chang_fig7::CHANG_FIG7,
