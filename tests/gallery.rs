@@ -62,7 +62,14 @@ fn the_gallery_writes_every_picture_and_a_page_that_loads_in_chromium_with_none_
         .collect();
     expected.push("exp_awt-fig7_awt_fig7.png".into());
     for e in wisptree::experiment::all() {
-        assert!(html.contains(e.expectation), "{}: its claim on the page", e.name);
+        let claim = e
+            .expectation
+            .replace('&', "&amp;")
+            .replace('<', "&lt;")
+            .replace('>', "&gt;")
+            .replace('"', "&quot;")
+            .replace('\'', "&#39;");
+        assert!(html.contains(&claim), "{}: its claim on the page", e.name);
         assert!(
             html.contains(&format!("id=\"{}\"", e.name)),
             "{}: a section",
