@@ -54,7 +54,7 @@ pub struct GalleryOutcome {
 /// `wisptree gallery`.
 pub fn run(cmd: &GalleryCommand) -> anyhow::Result<GalleryOutcome> {
     let mut out = OutDir::open(&cmd.out)?;
-    let size = if cmd.quick { (320, 240) } else { (640, 480) };
+    let size = if cmd.quick { (320, 240) } else { (480, 360) };
     let experiments = experiment::all();
     let bar = progress_bar(
         cmd.progress,

@@ -1,5 +1,7 @@
 //! The commands that run a simulation: `wisptree run` (simulation and logging threads, keys,
-//! style reload, stop), `wisptree export`, `wisptree experiment` and `wisptree sweep`.
+//! style reload, stop), `wisptree export`, `wisptree experiment`, `wisptree sweep` and
+//! `wisptree gallery` (`gallery`: the command; `gallery_page`: its HTML; `gallery_out`: the
+//! folder it writes, never losing a user's file).
 //!
 //! `run`, by concern, its arrows pointing down this list:
 //!

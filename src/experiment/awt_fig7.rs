@@ -154,7 +154,7 @@ fn run_one(
     }
     let finest_nodes = scene.model.nodes_on_level(scene.model.level_count() - 1);
     let mut m = Map::new();
-    m.insert("style".into(), json!(scene.source.to_string()));
+    m.insert("style".into(), json!(RUNS[row as usize].0));
     m.insert("motion".into(), json!(scene.motion_spec));
     m.insert("splits".into(), json!(tally.splits));
     m.insert("merges".into(), json!(tally.merges));
