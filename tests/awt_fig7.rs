@@ -68,7 +68,12 @@ fn every_style_splits_and_merges_and_its_counts_follow_from_the_events() {
     let labels: Vec<&str> = runs.iter().map(|r| r.label.as_str()).collect();
     assert_eq!(
         labels,
-        ["short_run", "long_lean", "long_curly_lean", "short_curly_lean"],
+        [
+            "short_run",
+            "long_lean",
+            "long_curly_lean",
+            "short_curly_lean"
+        ],
         "the figure's rows, top to bottom"
     );
     for r in &runs {
@@ -108,7 +113,11 @@ fn every_style_splits_and_merges_and_its_counts_follow_from_the_events() {
             r.label
         );
     }
-    assert_eq!(sink.frames, 4 * 55, "every frame of every run reaches the sink");
+    assert_eq!(
+        sink.frames,
+        4 * 55,
+        "every frame of every run reaches the sink"
+    );
     assert_eq!(sink.with_counters, sink.frames);
     assert_eq!(sink.with_images, 0, "no image unless the sink wants them");
 
@@ -128,7 +137,10 @@ fn every_style_splits_and_merges_and_its_counts_follow_from_the_events() {
                     dark += usize::from(p.iter().all(|&v| v < 110));
                 }
             }
-            assert!(dark > 200, "cell ({r}, {c}) shows hair: {dark} dark samples");
+            assert!(
+                dark > 200,
+                "cell ({r}, {c}) shows hair: {dark} dark samples"
+            );
         }
     }
 }

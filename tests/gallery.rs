@@ -76,7 +76,12 @@ fn the_gallery_writes_every_picture_and_a_page_that_loads_in_chromium_with_none_
             e.name
         );
     }
-    for label in ["short_run", "long_lean", "long_curly_lean", "short_curly_lean"] {
+    for label in [
+        "short_run",
+        "long_lean",
+        "long_curly_lean",
+        "short_curly_lean",
+    ] {
         expected.push(format!("exp_awt-fig7_{label}.png"));
     }
     for f in &expected {

@@ -92,8 +92,9 @@ impl FrameSink for RecordingSink {
                 } else {
                     EXPERIMENT_STRANDS
                 };
-                self.runs
-                    .push(RunLog::new(&self.rec, label, slot, &model, strands, camera)?);
+                self.runs.push(RunLog::new(
+                    &self.rec, label, slot, &model, strands, camera,
+                )?);
                 // The layout so far, at once: a viewer opening the file (or still loading it)
                 // shows the runs' views rather than its own guess; the last one sent, after
                 // the last run, has them all.
@@ -147,7 +148,10 @@ impl PictureSink {
             return Ok(());
         };
         std::fs::create_dir_all(dir).map_err(|e| {
-            BadInput(format!("--pictures {}: cannot create the folder: {e}", dir.display()))
+            BadInput(format!(
+                "--pictures {}: cannot create the folder: {e}",
+                dir.display()
+            ))
         })?;
         let path = dir.join(format!("{name}.png"));
         if let Some(bak) = super::backup::move_aside(&path).context("--pictures")? {
@@ -197,7 +201,10 @@ pub fn run(cmd: &ExperimentCommand) -> anyhow::Result<()> {
     if let Some(dir) = &cmd.pictures {
         // Before the runs: a bad folder is refused at once, not after minutes of simulation.
         std::fs::create_dir_all(dir).map_err(|e| {
-            BadInput(format!("--pictures {}: cannot create the folder: {e}", dir.display()))
+            BadInput(format!(
+                "--pictures {}: cannot create the folder: {e}",
+                dir.display()
+            ))
         })?;
     }
     let opts = ExperimentOptions::default();
@@ -224,7 +231,10 @@ pub fn run(cmd: &ExperimentCommand) -> anyhow::Result<()> {
             eprintln!("wrote {}", path.display());
             runs
         }
-        None => (def.run)(&opts, &mut PicturesOnly(PictureSink::new(cmd.pictures.clone())))?,
+        None => (def.run)(
+            &opts,
+            &mut PicturesOnly(PictureSink::new(cmd.pictures.clone())),
+        )?,
     };
     let report = ExperimentReport {
         experiment: def.name.to_owned(),

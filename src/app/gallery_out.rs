@@ -31,8 +31,7 @@ impl OutDir {
         if dir.exists() && !dir.is_dir() {
             return Err(bad("not a folder (give a new or empty folder)".into()).into());
         }
-        std::fs::create_dir_all(dir)
-            .map_err(|e| bad(format!("cannot create the folder: {e}")))?;
+        std::fs::create_dir_all(dir).map_err(|e| bad(format!("cannot create the folder: {e}")))?;
         let manifest = dir.join(MANIFEST);
         let earlier = match std::fs::read_to_string(&manifest) {
             Ok(text) => parse_manifest(&text),
@@ -147,7 +146,10 @@ mod tests {
         let mut out = OutDir::open(&dir).unwrap();
         out.write("index.html", b"gallery 1").unwrap();
         out.finish().unwrap();
-        assert_eq!(std::fs::read_to_string(dir.join("index.html.bak")).unwrap(), "mine");
+        assert_eq!(
+            std::fs::read_to_string(dir.join("index.html.bak")).unwrap(),
+            "mine"
+        );
         // A second gallery replaces its own file without a backup.
         std::fs::remove_file(dir.join("index.html.bak")).unwrap();
         let mut out = OutDir::open(&dir).unwrap();

@@ -185,7 +185,11 @@ mod tests {
         assert!(h.contains("a &lt;b&gt; &amp; &quot;c&quot;"), "{h}");
         assert!(h.contains("crossings &lt; 1"));
         assert!(h.contains("crossings = 3"));
-        for f in ["style_long.png", "exp_x-fig1_sheet.png", "exp_x-fig1_none.png"] {
+        for f in [
+            "style_long.png",
+            "exp_x-fig1_sheet.png",
+            "exp_x-fig1_none.png",
+        ] {
             assert!(h.contains(&format!("src=\"{f}\"")), "{f}");
         }
     }

@@ -261,11 +261,10 @@ impl HeadCamera {
     /// The camera for the solver's pose now.
     fn at(&self, s: &dyn Solver) -> Camera {
         let d = s.pose().transform_point(&self.scalp) - self.scalp;
-        let d = [d.x as f32, d.y as f32, d.z as f32];
         let mut c = self.base;
-        for a in 0..3 {
-            c.eye[a] += d[a];
-            c.target[a] += d[a];
+        for (a, v) in d.iter().enumerate() {
+            c.eye[a] += *v as f32;
+            c.target[a] += *v as f32;
         }
         c
     }
