@@ -1,5 +1,5 @@
 //! The command line: `wisptree [run] …`, `wisptree inspect`, `wisptree styles`,
-//! `wisptree bench`. Turns arguments into plain option structs, runs the command, and maps
+//! `wisptree bench`, `wisptree experiment`, `wisptree gallery`, …. Turns arguments into plain option structs, runs the command, and maps
 //! errors to exit codes (2 for bad input). Nothing else in the crate uses this module.
 
 mod args;
