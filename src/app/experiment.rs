@@ -38,13 +38,19 @@ struct RecordingSink {
     runs: Vec<RunLog>,
     /// The labels of the runs that logged a rendered frame (their cells show it).
     rendered: Vec<String>,
+    /// The labels of the runs whose 3D view follows the head.
+    followed: Vec<String>,
     pictures: PictureSink,
 }
 
 impl RecordingSink {
     /// The layout's view of run `l`.
     fn view(&self, l: &RunLog) -> crate::stream::RunView {
-        l.view(self.rendered.contains(&l.label))
+        let mut v = l.view(self.rendered.contains(&l.label));
+        if self.followed.contains(&l.label) {
+            v.track = Some(format!("/runs/{}{}", l.label, crate::stream::paths::SCALP));
+        }
+        v
     }
 }
 
@@ -73,8 +79,15 @@ impl FrameSink for RecordingSink {
         events: &[AdaptEvent],
         extras: FrameExtras<'_>,
     ) -> anyhow::Result<()> {
-        if extras.image.is_some() && !self.rendered.iter().any(|l| l == label) {
-            self.rendered.push(label.to_owned());
+        let new_render = extras.image.is_some() && !self.rendered.iter().any(|l| l == label);
+        let new_follow = extras.follow_head && !self.followed.iter().any(|l| l == label);
+        if new_render || new_follow {
+            if new_render {
+                self.rendered.push(label.to_owned());
+            }
+            if new_follow {
+                self.followed.push(label.to_owned());
+            }
             let views: Vec<_> = self.runs.iter().map(|l| self.view(l)).collect();
             super::runs_log::send_layout(&self.rec, &views, None)?;
         }
@@ -215,6 +228,7 @@ pub fn run(cmd: &ExperimentCommand) -> anyhow::Result<()> {
                 rec: rec.clone(),
                 runs: Vec::new(),
                 rendered: Vec::new(),
+                followed: Vec::new(),
                 pictures: PictureSink::new(cmd.pictures.clone()),
             };
             let runs = (def.run)(&opts, &mut sink)?;

@@ -89,6 +89,7 @@ impl RunLog {
             label: self.label.clone(),
             camera: self.camera,
             render,
+            track: None,
         }
     }
 

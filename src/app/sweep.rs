@@ -233,6 +233,7 @@ pub fn sweep_into(
             label: c.label.clone(),
             camera,
             render: cmd.render.is_some(),
+            track: None,
         })
         .collect();
     // One blueprint id per sweep: the merged parts hold one layout, not one per part.

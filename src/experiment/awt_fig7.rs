@@ -149,6 +149,7 @@ fn run_one(
         let extras = FrameExtras {
             counters: Some(&frame.counters),
             image: rendered,
+            follow_head: view.travels,
         };
         sink.frame_with(label, s.as_mut(), &frame.events, extras)?;
     }
@@ -228,16 +229,23 @@ impl Tally {
 struct HeadCamera {
     base: Camera,
     scalp: Point3<f64>,
+    /// The head leaves its starting place (more than [`TRAVELS_M`]): a fixed view loses it.
+    travels: bool,
 }
+
+/// How far the head must go for the run's 3D view to follow it, m.
+const TRAVELS_M: f64 = 1.0;
 
 impl HeadCamera {
     fn new(scene: &Scene) -> HeadCamera {
         let m = &scene.model;
         let scalp = Point3::from(m.scalp_center);
         let (mut lo, mut hi) = ([f32::INFINITY; 3], [f32::NEG_INFINITY; 3]);
+        let mut travels = false;
         for q in 0..=20 {
             let pose = scene.motion.pose(f64::from(q) * 0.25);
             let head: Vector3<f64> = pose.transform_point(&scalp) - scalp;
+            travels |= head.norm() > TRAVELS_M;
             for (j, p) in m.strands.rest.iter().enumerate() {
                 if !(j / m.k).is_multiple_of(7) {
                     continue;
@@ -255,6 +263,7 @@ impl HeadCamera {
         HeadCamera {
             base: Camera::from_params(&scene.loaded.style.render, lo, hi, DEFAULT_VIEW),
             scalp,
+            travels,
         }
     }
 

@@ -64,6 +64,8 @@ pub struct FrameExtras<'a> {
     pub counters: Option<&'a Counters>,
     /// The frame rendered, if the experiment rendered it.
     pub image: Option<&'a Image>,
+    /// The head travels (as under `run`): a view of the run should follow it.
+    pub follow_head: bool,
 }
 
 /// A sink that drops every frame (tests, `--json` without `--save`).
