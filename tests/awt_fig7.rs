@@ -14,6 +14,8 @@ struct Keep {
     frames: usize,
     with_counters: usize,
     with_images: usize,
+    /// Runs asked to follow their head.
+    followed: Vec<String>,
 }
 
 impl FrameSink for Keep {
@@ -30,6 +32,9 @@ impl FrameSink for Keep {
         extras: FrameExtras<'_>,
     ) -> anyhow::Result<()> {
         self.with_counters += usize::from(extras.counters.is_some());
+        if extras.follow_head && !self.followed.iter().any(|l| l == label) {
+            self.followed.push(label.to_owned());
+        }
         if let Some(img) = extras.image {
             assert!(img.width > 0 && img.rgb.len() == (img.width * img.height * 3) as usize);
             self.with_images += 1;
@@ -120,6 +125,11 @@ fn every_style_splits_and_merges_and_its_counts_follow_from_the_events() {
     );
     assert_eq!(sink.with_counters, sink.frames);
     assert_eq!(sink.with_images, 0, "no image unless the sink wants them");
+    assert_eq!(
+        sink.followed,
+        ["short_run"],
+        "only the running head leaves a fixed view"
+    );
 
     // The contact sheet: 4 rows (styles) × 4 columns (times), each cell rendered hair.
     assert_eq!(sink.pictures.len(), 1);
