@@ -121,6 +121,9 @@ impl FrameSink for RecordingSink {
         r.frame.events.extend_from_slice(events);
         if let Some(c) = extras.counters {
             r.frame.counters.clone_from(c);
+            // The layout's "ms per step" plot: the frame's stage times, per step.
+            r.frame.step_ms =
+                c.times.total().as_secs_f64() * 1e3 / solver.steps_per_frame().max(1) as f64;
         }
         r.frame.image = extras.image.map(|img| crate::frame::EncodedImage {
             jpeg: crate::render::encode_jpeg(img, super::render_thread::JPEG_QUALITY),
