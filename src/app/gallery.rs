@@ -282,6 +282,16 @@ impl FrameSink for GallerySink {
         solver.sync_display();
         k.builder.fill_strands(&*solver, &mut k.strands);
         pipeline::fill_body(solver.model(), solver.pose(), &mut k.body);
+        // A moving obstacle (chang-fig7's sphere) is drawn as a body sphere: the run's picture
+        // shows what the hair lies on.
+        let mut obstacles = Vec::new();
+        solver.obstacle_spheres(&mut obstacles);
+        for (c, r) in obstacles {
+            k.body
+                .sphere_centers
+                .push([c.x as f32, c.y as f32, c.z as f32]);
+            k.body.sphere_radii.push(r as f32);
+        }
         Ok(())
     }
 
