@@ -157,3 +157,36 @@ fn brush_strips_join_both_grid_directions() {
     }
     assert_eq!((along_x, along_z), (56, 56));
 }
+
+/// The gallery draws a moving obstacle as a body sphere: the solver hands out chang-fig7's
+/// sphere posed where its path puts it, and it moves with the solver's time.
+#[test]
+fn guide_solver_hands_out_its_obstacle_posed() {
+    use wisptree::solver::Solver as _;
+    let text = include_str!("../scenes/chang_fig7.ron");
+    let loaded = wisptree::style::parse(std::path::Path::new("chang_fig7.ron"), text).unwrap();
+    let model = std::sync::Arc::new(wisptree::model::HairModel::from_style(&loaded).unwrap());
+    let motion = wisptree::motion::Motion::parse("still", model.scalp_center.into()).unwrap();
+    let gp = loaded.style.guides.clone();
+    let o = gp.obstacles[0].clone();
+    let mut s =
+        wisptree::solver::guides::GuideSolver::new(model, motion, loaded.style.sim.clone(), gp);
+    let mut spheres = Vec::new();
+    s.obstacle_spheres(&mut spheres);
+    assert_eq!(spheres.len(), 1);
+    assert_eq!(spheres[0], (o.center_at(0.0).0, o.radius));
+    let mut report = s.new_report();
+    let steps = (o.stop_time() / s.dt()).ceil() as usize + 1;
+    for _ in 0..steps {
+        s.step(&mut report);
+    }
+    spheres.clear();
+    s.obstacle_spheres(&mut spheres);
+    let end = o.center_at(o.stop_time()).0;
+    assert!(
+        (spheres[0].0 - end).norm() < 1e-9,
+        "{:?} vs {end}",
+        spheres[0]
+    );
+    assert!((end - o.center_at(0.0).0).norm() > 0.05, "the sphere moves");
+}

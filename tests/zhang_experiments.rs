@@ -171,7 +171,41 @@ fn zhang_fig14_command_prints_records_and_saves_its_picture() {
     assert_eq!((img.width(), img.height()), (5 * 320 + 4 * 6, 160));
     let (code, _, err) = wisptree(&args);
     assert_eq!(code, 0, "{err}");
-    assert!(png.exists() && dir.path().join("pictures/zhang_fig14.png.bak").exists());
+    let bak = dir.path().join("pictures/zhang_fig14.png.bak");
+    assert!(png.exists() && bak.exists());
+    // A third run would lose the first picture: it stops instead, both files kept.
+    let (png_bytes, bak_bytes) = (std::fs::read(&png).unwrap(), std::fs::read(&bak).unwrap());
+    let (code, _, err) = wisptree(&args);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("zhang_fig14.png.bak"), "{err}");
+    assert_eq!(std::fs::read(&png).unwrap(), png_bytes);
+    assert_eq!(std::fs::read(&bak).unwrap(), bak_bytes);
+}
+
+/// `--out` is checked before the runs: a folder that cannot be made exits 2 naming `--out`
+/// and writes no numbers; an experiment that makes no picture leaves no folder behind.
+#[test]
+fn experiment_out_is_checked_first_and_left_out_when_empty() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = |f: &str| dir.path().join(f).to_str().unwrap().to_owned();
+    std::fs::write(p("a_file"), "not a folder").unwrap();
+    let (code, _, err) = wisptree(&[
+        "experiment",
+        "zhang-fig14",
+        "--out",
+        &p("a_file/pictures"),
+        "--json",
+        &p("fig14.json"),
+    ]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("--out"), "{err}");
+    assert!(!dir.path().join("fig14.json").exists(), "the runs started");
+    let (code, _, err) = wisptree(&["experiment", "plante-fig9", "--out", &p("new/pictures")]);
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        !dir.path().join("new").exists(),
+        "an empty picture folder was left"
+    );
 }
 
 /// Point sampling (the `none` run's "no antialiasing"): an opaque hair over a plain background

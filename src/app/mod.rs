@@ -1,5 +1,7 @@
 //! The commands that run a simulation: `wisptree run` (simulation and logging threads, keys,
-//! style reload, stop), `wisptree export`, `wisptree experiment` and `wisptree sweep`.
+//! style reload, stop), `wisptree export`, `wisptree experiment`, `wisptree sweep` and
+//! `wisptree gallery` (`gallery`: the command; `gallery_page`: its HTML; `gallery_out`: the
+//! folder it writes, never losing a user's file).
 //!
 //! `run`, by concern, its arrows pointing down this list:
 //!
@@ -20,12 +22,16 @@
 //! `export` writes `.hair` and `.tfx` files itself, and a USD layer through `export_usd` (the
 //! layer's prims) and `usda` (the text format); `export_space` checks the free space first.
 
+pub mod backup;
 mod console;
 pub mod coverage;
 pub mod experiment;
 pub mod export;
 mod export_space;
 pub mod export_usd;
+pub mod gallery;
+mod gallery_out;
+mod gallery_page;
 pub mod keys;
 mod log_thread;
 pub mod reload;

@@ -90,6 +90,7 @@ impl RunLog {
             camera: self.camera,
             render,
             stats: true,
+            track: None,
         }
     }
 

@@ -234,6 +234,7 @@ pub fn sweep_into(
             camera,
             render: cmd.render.is_some(),
             stats: true,
+            track: None,
         })
         .collect();
     // One blueprint id per sweep: the merged parts hold one layout, not one per part.

@@ -19,9 +19,9 @@ pub struct ExperimentArgs {
     /// Write the numbers as JSON to FILE: `{"experiment": NAME, "runs": [{"label": .., ..}]}`.
     #[arg(long, value_name = "FILE")]
     pub json: Option<PathBuf>,
-    /// Write the experiment's pictures (the rendering experiments' PNGs) to this folder,
-    /// created if needed; a picture already there is kept as `NAME.png.bak`. Default:
-    /// `wisptree-experiments/<NAME>`.
+    /// Write the experiment's pictures (the rendering experiments' PNGs, awt-fig7's contact
+    /// sheet) to this folder, created if needed (before the runs start); a picture already
+    /// there is kept as `NAME.png.bak`. Default: `wisptree-experiments/<NAME>`.
     #[arg(long, value_name = "DIR")]
     pub out: Option<PathBuf>,
 }

@@ -1,11 +1,12 @@
 //! The command line: `wisptree [run] …`, `wisptree inspect`, `wisptree styles`,
-//! `wisptree bench`. Turns arguments into plain option structs, runs the command, and maps
+//! `wisptree bench`, `wisptree experiment`, `wisptree gallery`, …. Turns arguments into plain option structs, runs the command, and maps
 //! errors to exit codes (2 for bad input). Nothing else in the crate uses this module.
 
 mod args;
 mod bench_args;
 mod experiment_args;
 mod export_args;
+mod gallery_args;
 mod inspect;
 mod render_args;
 mod styles;
@@ -17,6 +18,7 @@ pub use args::{RunArgs, SinkArgs};
 pub use bench_args::BenchArgs;
 pub use experiment_args::ExperimentArgs;
 pub use export_args::ExportArgs;
+pub use gallery_args::GalleryArgs;
 pub use inspect::{summarize, InspectArgs, ModelSummary};
 pub use render_args::RenderArgs;
 pub use styles::StylesArgs;
@@ -65,6 +67,9 @@ pub enum Command {
     /// Run several configurations (split and merge thresholds, models, or named variants) side
     /// by side into one recording, one subtree `/runs/<label>` each, and print their numbers.
     Sweep(SweepArgs),
+    /// Render every built-in style and every experiment's key frames into PNGs, with an
+    /// index.html showing each experiment's numbers beside the paper's claim.
+    Gallery(GalleryArgs),
 }
 
 /// The command line as clap parses it: [`Cli`], where every option that takes a value also
@@ -119,6 +124,7 @@ pub fn main() -> i32 {
         Some(Command::Render(a)) => crate::app::render_cmd::run(&a.command()).map(|_| ()),
         Some(Command::Experiment(a)) => crate::app::experiment::run(&a.command()),
         Some(Command::Sweep(a)) => crate::app::sweep::run(&a.command()),
+        Some(Command::Gallery(a)) => gallery_args::gallery(&a),
         Some(Command::Export(a)) => crate::app::export::run(&a.options(), !a.no_progress),
         None => crate::app::run(cli.run.options()),
     };

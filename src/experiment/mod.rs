@@ -7,6 +7,7 @@
 //! never name Rerun.
 
 pub mod awt_fig5;
+pub mod awt_fig7;
 pub mod chang;
 pub mod chang_fig6;
 pub mod chang_fig7;
@@ -18,6 +19,7 @@ mod zhang_images;
 
 use crate::frame::StrandBuf;
 use crate::render::Image;
+use crate::report::Counters;
 use crate::solver::{AdaptEvent, Solver};
 
 /// Where an experiment's frames go.
@@ -43,11 +45,44 @@ pub trait FrameSink {
         Ok(())
     }
 
-    /// A picture of the experiment as a whole (its runs' images side by side), to be saved as
-    /// `<stem>.png`.
-    fn picture(&mut self, _stem: &str, _image: &Image) -> anyhow::Result<()> {
+    /// [`FrameSink::frame`] with what an experiment may know besides: the counters of the
+    /// frame's last step (active nodes per level, plotted per run) and the frame's rendered
+    /// image (shown beside the run's 3D view). A sink that has no use for them keeps the
+    /// default, which drops them.
+    fn frame_with(
+        &mut self,
+        label: &str,
+        solver: &mut dyn Solver,
+        events: &[AdaptEvent],
+        extras: FrameExtras<'_>,
+    ) -> anyhow::Result<()> {
+        let _ = extras;
+        self.frame(label, solver, events)
+    }
+
+    /// Whether the sink shows rendered frames: an experiment that can render its runs renders
+    /// every frame only when asked, since rendering costs more than its simulation.
+    fn wants_images(&self) -> bool {
+        false
+    }
+
+    /// A picture the experiment made of itself (a contact sheet, its runs' images side by
+    /// side), to be saved as `<stem>.png` (`awt_fig7`, `zhang_fig12`). The default drops it.
+    fn picture(&mut self, name: &str, image: &Image) -> anyhow::Result<()> {
+        let _ = (name, image);
         Ok(())
     }
+}
+
+/// What [`FrameSink::frame_with`] carries besides the solver and the events.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct FrameExtras<'a> {
+    /// The counters of the frame's last step (from [`crate::pipeline::step_frame`]).
+    pub counters: Option<&'a Counters>,
+    /// The frame rendered, if the experiment rendered it.
+    pub image: Option<&'a Image>,
+    /// The head travels (as under `run`): a view of the run should follow it.
+    pub follow_head: bool,
 }
 
 /// A sink that drops every frame (tests, `--json` without `--save`).
@@ -112,6 +147,7 @@ pub fn all() -> Vec<&'static ExperimentDef> {
         &plante::PLANTE_FIG8,
         &plante::PLANTE_FIG9,
         &awt_fig5::AWT_FIG5,
+        &awt_fig7::AWT_FIG7,
         &chang::CHANG_SHAKE,
         &chang_fig6::CHANG_FIG6,
         &chang_fig7::CHANG_FIG7,

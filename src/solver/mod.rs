@@ -270,6 +270,11 @@ pub trait Solver: Send {
     /// `/hair/<path_segment>/…`. Strands and body are drawn by the pipeline.
     fn draw(&self, frame: &mut Frame);
 
+    /// Appends the spheres that move on their own path rather than with the head (the
+    /// `guides:` obstacles, the sphere of Chang, Jin, Yu 2002, Fig. 7), posed now: centre and
+    /// radius. A picture of the frame draws them like the body spheres; most solvers have none.
+    fn obstacle_spheres(&self, _out: &mut Vec<(Vector3<f64>, f64)>) {}
+
     /// Appends the current control points of strand `strand` of the model (root first) to
     /// `out`. Every strand of the model has points; the pipeline smooths them.
     fn strand_points(&self, strand: usize, out: &mut Vec<Vector3<f64>>);

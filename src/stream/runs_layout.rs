@@ -30,6 +30,9 @@ pub struct RunView {
     /// The run steps a solver and logs its stats: the overlaid plots show them (a layout of
     /// runs none of which does, a rendering experiment's, has no plots).
     pub stats: bool,
+    /// An entity the 3D view follows (the scalp of a head that travels, as under `run`, which
+    /// would leave a fixed view within a second).
+    pub track: Option<String>,
 }
 
 /// Total active nodes of a run (the sum over levels), the stat the multi-run layout overlays:
@@ -160,14 +163,15 @@ fn log_run_cell(bp: &RecordingStream, k: u32, run: &RunView) -> anyhow::Result<S
     )?;
     let (e, t) = (run.camera.eye, run.camera.target);
     let eye: [f32; 3] = std::array::from_fn(|a| t[a] + (e[a] - t[a]) * RUN_EYE_SCALE);
-    bp.log(
-        format!("{view}/EyeControls3D"),
-        &EyeControls3D::new()
-            .with_kind(Eye3DKind::Orbital)
-            .with_position(eye)
-            .with_look_target(t)
-            .with_eye_up([0.0f32, 1.0, 0.0]),
-    )?;
+    let mut eye = EyeControls3D::new()
+        .with_kind(Eye3DKind::Orbital)
+        .with_position(eye)
+        .with_look_target(t)
+        .with_eye_up([0.0f32, 1.0, 0.0]);
+    if let Some(entity) = &run.track {
+        eye = eye.with_tracking_entity(entity.as_str());
+    }
+    bp.log(format!("{view}/EyeControls3D"), &eye)?;
     if !run.render {
         return Ok(view);
     }

@@ -153,6 +153,13 @@ impl Solver for GuideSolver {
         super::display::draw(self, frame);
     }
 
+    fn obstacle_spheres(&self, out: &mut Vec<(nalgebra::Vector3<f64>, f64)>) {
+        out.extend(self.gp.obstacles.iter().map(|o| {
+            let p = super::obstacle::posed(o, self.time);
+            (p.center, p.radius)
+        }));
+    }
+
     fn strand_points(&self, strand: usize, out: &mut Vec<Vector3<f64>>) {
         let k = self.model.k;
         out.extend_from_slice(&self.dense.points[strand * k..(strand + 1) * k]);
