@@ -6,6 +6,8 @@
 
 use serde::{Deserialize, Serialize};
 
+pub use super::body::{BodyItem, Capsule, MeshRef};
+
 /// A 3-vector in a style file: `(x, y, z)`.
 pub type Vec3 = [f64; 3];
 
@@ -61,15 +63,21 @@ pub struct Head {
     /// radii (0.075, 0.095, 0.09) m.
     #[serde(default = "default_scalp")]
     pub scalp: Ellipsoid,
-    /// Collision spheres of the head and body, moving with the character.
+    /// Collision bodies of the head and body, moving with the character: spheres
+    /// `(center: .., radius: ..)` (or `Sphere(..)`), `Capsule(a: .., b: .., radius: ..)` and
+    /// `Mesh(file: .., scale: .., translate: .., up: Y|Z)` (see [`super::body`]).
     /// Default: a head sphere just inside the scalp, a neck and two shoulders/torso spheres.
     #[serde(default = "default_body")]
-    pub body: Vec<Sphere>,
+    pub body: Vec<BodyItem>,
     /// Replace `body` by one sphere fitted to the strands' roots (least squares, shrunk so
     /// that every root lies on or outside it). For imported hair whose head is not given.
     /// Default false.
     #[serde(default)]
     pub fit_body: bool,
+    /// Move strand roots that lie inside a mesh body onto its surface along its normal, at
+    /// load. Default false.
+    #[serde(default)]
+    pub push_roots_out: bool,
 }
 
 impl Default for Head {
@@ -78,6 +86,7 @@ impl Default for Head {
             scalp: default_scalp(),
             body: default_body(),
             fit_body: false,
+            push_roots_out: false,
         }
     }
 }
@@ -89,8 +98,8 @@ fn default_scalp() -> Ellipsoid {
     }
 }
 
-fn default_body() -> Vec<Sphere> {
-    vec![
+fn default_body() -> Vec<BodyItem> {
+    [
         Sphere {
             center: [0.0, 1.6, 0.0],
             radius: 0.072,
@@ -112,6 +121,9 @@ fn default_body() -> Vec<Sphere> {
             radius: 0.07,
         },
     ]
+    .into_iter()
+    .map(BodyItem::Sphere)
+    .collect()
 }
 
 /// An axis-aligned ellipsoid.

@@ -50,10 +50,11 @@ pub fn generate(style: &Style, g: &Generated) -> Result<RawHair, Invalid> {
                 "the product of the branching factors overflows".to_string(),
             )
         })?;
+    let spheres = style.head.spheres();
     let mut grower = Generator {
         seed: style.seed,
         scalp: &style.head.scalp,
-        body: &style.head.body,
+        body: &spheres,
         samples: g.samples,
         min_per_tile,
         hair: RawHair::default(),
