@@ -206,7 +206,8 @@ pub fn push_roots_out(
         if p.distance >= 0.0 {
             continue;
         }
-        let shift = p.normal * -p.distance;
+        // 10 µm past the surface: on it, without the f32 tree finding the root inside again.
+        let shift = p.normal * (1e-5 - p.distance);
         for q in &mut st.points {
             *q = (Vector3::from(*q) + shift).into();
         }
