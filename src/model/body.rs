@@ -250,7 +250,8 @@ pub fn warnings(model: &crate::model::HairModel) -> Vec<String> {
     let depth = |p: &Vector3<f64>| {
         nearest(&model.colliders, p, 0.0)
             .map(|q| -q.distance)
-            .filter(|&d| d > 0.0)
+            // Below a micrometre is the f32 tree's rounding, not a node inside.
+            .filter(|&d| d > 1e-6)
     };
     let (mut roots, mut root_depth) = (0usize, 0.0f64);
     for s in 0..model.strands.len() {

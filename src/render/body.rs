@@ -212,6 +212,7 @@ mod tests {
             scalp_center: [0.0, 1.62, 0.01],
             scalp_radii: [0.08, 0.1, 0.09],
             scalp_rotation: [0.1, 0.2, 0.0, 0.97],
+            ..Default::default()
         };
         let (mut hits, mut misses) = (0, 0);
         for cam in [&outside, &inside] {
