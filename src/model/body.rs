@@ -43,6 +43,34 @@ pub struct MeshCollider {
     /// The point the tree's coordinates are relative to, m.
     origin: Vector3<f64>,
     tree: TriMesh,
+    /// A coarse grid over the mesh's box: per cell, a distance below which no point of the
+    /// cell outside the mesh comes to the surface (`-1`: inside, unknown or near). Most hair
+    /// nodes a centimetre or more off the skin skip the tree search with it.
+    grid: Grid,
+}
+
+/// See [`MeshCollider::grid`].
+#[derive(Debug)]
+struct Grid {
+    lo: Vector3<f64>,
+    cell: f64,
+    dims: [usize; 3],
+    clear: Vec<f32>,
+}
+
+impl Grid {
+    /// The clearance of the cell holding `x` (`None` outside the grid: there the tree decides).
+    fn clearance(&self, x: &Vector3<f64>) -> Option<f64> {
+        let mut idx = 0;
+        for a in (0..3).rev() {
+            let f = ((x[a] - self.lo[a]) / self.cell).floor();
+            if !(f >= 0.0 && (f as usize) < self.dims[a]) {
+                return None;
+            }
+            idx = idx * self.dims[a] + f as usize;
+        }
+        Some(self.clear[idx] as f64)
+    }
 }
 
 /// The answer to "where is `x` relative to this surface".
@@ -126,16 +154,21 @@ impl MeshCollider {
         let flags = TriMeshFlags::ORIENTED | TriMeshFlags::DELETE_DEGENERATE_TRIANGLES;
         let tree = TriMesh::with_flags(pts, mesh.triangles.clone(), flags)
             .expect("a loaded mesh has at least one triangle");
+        let grid = build_grid(&tree, &origin);
         MeshCollider {
             mesh: mesh.clone(),
             path: path.to_path_buf(),
             origin,
             tree,
+            grid,
         }
     }
 
     /// See [`Collider::probe`].
     pub fn probe(&self, x: &Vector3<f64>, reach: f64) -> Option<Probe> {
+        if self.grid.clearance(x).is_some_and(|c| c > reach) {
+            return None;
+        }
         let local = (x - self.origin).map(|c| c as f32);
         let (proj, (tri, _)) = self
             .tree
@@ -160,6 +193,47 @@ impl MeshCollider {
             distance: sign * len as f64,
             normal,
         })
+    }
+}
+
+/// Grid cell edge, m.
+const GRID_CELL: f64 = 0.01;
+
+fn build_grid(tree: &TriMesh, origin: &Vector3<f64>) -> Grid {
+    let aabb = tree.local_aabb();
+    let pad = MESH_DEPTH;
+    let lo = aabb.mins.coords.map(|c| c as f64) + origin - Vector3::repeat(pad);
+    let hi = aabb.maxs.coords.map(|c| c as f64) + origin + Vector3::repeat(pad);
+    let dims = [0, 1, 2].map(|a| ((hi[a] - lo[a]) / GRID_CELL).ceil().max(1.0) as usize);
+    let half_diag = GRID_CELL * 3f64.sqrt() / 2.0;
+    let search = (MESH_DEPTH + half_diag) as f32;
+    let mut clear = Vec::with_capacity(dims[0] * dims[1] * dims[2]);
+    for k in 0..dims[2] {
+        for j in 0..dims[1] {
+            for i in 0..dims[0] {
+                let c =
+                    lo + Vector3::new(i as f64 + 0.5, j as f64 + 0.5, k as f64 + 0.5) * GRID_CELL;
+                let local = Point3::from((c - origin).map(|v| v as f32));
+                // Every point of the cell is within `half_diag` of its centre: an outside
+                // centre at distance d leaves the cell's points at least d − half_diag away,
+                // and on the outside side as long as that is positive.
+                let v = match tree
+                    .project_local_point_and_get_location_with_max_dist(&local, false, search)
+                {
+                    Some((p, _)) if !p.is_inside => (p.point - local).norm() as f64 - half_diag,
+                    Some(_) => -1.0,
+                    // Farther than the search: outside or deep inside, not known cheaply.
+                    None => -1.0,
+                };
+                clear.push(v as f32);
+            }
+        }
+    }
+    Grid {
+        lo,
+        cell: GRID_CELL,
+        dims,
+        clear,
     }
 }
 
