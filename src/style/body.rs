@@ -323,3 +323,33 @@ pub fn validate(body: &[BodyItem]) -> Result<(), (String, String)> {
     }
     Ok(())
 }
+
+/// The default body: a head sphere just inside the scalp, a neck and two shoulders/torso
+/// spheres.
+pub fn default_body() -> Vec<BodyItem> {
+    [
+        Sphere {
+            center: [0.0, 1.6, 0.0],
+            radius: 0.072,
+        },
+        Sphere {
+            center: [0.0, 1.47, -0.01],
+            radius: 0.05,
+        },
+        Sphere {
+            center: [0.0, 1.25, -0.02],
+            radius: 0.15,
+        },
+        Sphere {
+            center: [0.12, 1.36, -0.02],
+            radius: 0.07,
+        },
+        Sphere {
+            center: [-0.12, 1.36, -0.02],
+            radius: 0.07,
+        },
+    ]
+    .into_iter()
+    .map(BodyItem::Sphere)
+    .collect()
+}

@@ -32,7 +32,6 @@ pub fn load_obj(path: &Path, m: &MeshRef) -> Result<TriangleMesh, StyleError> {
         single_index: false,
         ignore_points: true,
         ignore_lines: true,
-        ..Default::default()
     };
     // Materials are not needed: a missing `.mtl` is not an error.
     let loaded = tobj::load_obj_buf(&mut text.as_bytes(), &opts, |_| {
@@ -124,10 +123,10 @@ fn locate(text: &str, e: &tobj::LoadError) -> (usize, String) {
         let rest: Vec<&str> = words.collect();
         let line = n + 1;
         match (tag, e) {
-            ("v", E::PositionParseError) => {
-                if rest.len() < 3 || rest.iter().any(|w| w.parse::<f64>().is_err()) {
-                    return (line, format!("bad vertex line `{}`", raw.trim()));
-                }
+            ("v", E::PositionParseError)
+                if rest.len() < 3 || rest.iter().any(|w| w.parse::<f64>().is_err()) =>
+            {
+                return (line, format!("bad vertex line `{}`", raw.trim()));
             }
             ("v", _) => positions += 1,
             ("f", E::FaceParseError | E::FaceVertexOutOfBounds | E::InvalidPolygon) => {

@@ -67,7 +67,7 @@ pub struct Head {
     /// `(center: .., radius: ..)` (or `Sphere(..)`), `Capsule(a: .., b: .., radius: ..)` and
     /// `Mesh(file: .., scale: .., translate: .., up: Y|Z)` (see [`super::body`]).
     /// Default: a head sphere just inside the scalp, a neck and two shoulders/torso spheres.
-    #[serde(default = "default_body")]
+    #[serde(default = "super::body::default_body")]
     pub body: Vec<BodyItem>,
     /// Replace `body` by one sphere fitted to the strands' roots (least squares, shrunk so
     /// that every root lies on or outside it). For imported hair whose head is not given.
@@ -84,7 +84,7 @@ impl Default for Head {
     fn default() -> Self {
         Head {
             scalp: default_scalp(),
-            body: default_body(),
+            body: super::body::default_body(),
             fit_body: false,
             push_roots_out: false,
         }
@@ -96,34 +96,6 @@ fn default_scalp() -> Ellipsoid {
         center: [0.0, 1.6, 0.0],
         radii: [0.075, 0.095, 0.09],
     }
-}
-
-fn default_body() -> Vec<BodyItem> {
-    [
-        Sphere {
-            center: [0.0, 1.6, 0.0],
-            radius: 0.072,
-        },
-        Sphere {
-            center: [0.0, 1.47, -0.01],
-            radius: 0.05,
-        },
-        Sphere {
-            center: [0.0, 1.25, -0.02],
-            radius: 0.15,
-        },
-        Sphere {
-            center: [0.12, 1.36, -0.02],
-            radius: 0.07,
-        },
-        Sphere {
-            center: [-0.12, 1.36, -0.02],
-            radius: 0.07,
-        },
-    ]
-    .into_iter()
-    .map(BodyItem::Sphere)
-    .collect()
 }
 
 /// An axis-aligned ellipsoid.
