@@ -147,7 +147,7 @@ fn stages(c: &mut Criterion) {
                         pose.velocity_at(&Point3::from(*x))
                     });
                     if matches!(link, Link::Rigid { .. }) {
-                        dynamics::restore_lengths_outside(s, &body, &pose);
+                        dynamics::restore_lengths_outside(s, &body, &[], &pose);
                     }
                     dynamics::update_accelerations(s, dt, params.accel_smoothing);
                     n

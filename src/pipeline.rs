@@ -93,6 +93,21 @@ pub fn fill_body(m: &crate::model::HairModel, pose: &crate::motion::Pose, body: 
     body.scalp_radii = to32(&m.scalp_radii);
     let q = pose.iso.rotation;
     body.scalp_rotation = [q.i as f32, q.j as f32, q.k as f32, q.w as f32];
+    body.pose_rotation = body.scalp_rotation;
+    body.pose_translation = to32(&pose.iso.translation.vector);
+    body.capsule_ends.clear();
+    body.capsule_radii.clear();
+    body.meshes.clear();
+    for c in &m.colliders {
+        match c {
+            crate::model::body::Collider::Capsule { a, b, radius } => {
+                let end = |p: &Vector3<f64>| to32(&pose.transform_point(&Point3::from(*p)).coords);
+                body.capsule_ends.push([end(a), end(b)]);
+                body.capsule_radii.push(*radius as f32);
+            }
+            crate::model::body::Collider::Mesh(mc) => body.meshes.push(mc.mesh.clone()),
+        }
+    }
 }
 
 /// Appends a uniform Catmull-Rom spline through `p` with `sub` points per span (the control

@@ -283,6 +283,7 @@ pub fn warnings(model: &HairModel) -> Vec<String> {
             ));
         }
     }
+    out.extend(crate::model::body::warnings(model));
     out
 }
 

@@ -56,7 +56,7 @@ fn tile_of(name: &str) -> (u32, u32) {
 fn assert_outside_body(s: &Style, hair: &RawHair, what: &str) {
     for (k, st) in hair.strands.iter().enumerate() {
         for (j, p) in st.points.iter().enumerate() {
-            for (b, sph) in s.head.body.iter().enumerate() {
+            for (b, sph) in s.head.spheres().iter().enumerate() {
                 let d = norm(sub(*p, sph.center));
                 assert!(
                     d >= sph.radius,

@@ -154,7 +154,11 @@ fn hairsalon_style_tells_how_many_strands_were_skipped() {
         note.contains("skipped 3 one-point") && note.contains("of 9"),
         "{note}"
     );
-    assert_eq!(loaded.body, loaded.style.head.body, "head.body by default");
+    assert_eq!(
+        loaded.body,
+        loaded.style.head.spheres(),
+        "head.body by default"
+    );
 }
 
 #[test]
@@ -188,7 +192,7 @@ fn fit_body_finds_the_head_sphere_under_the_roots() {
     // Without fit_body the style's own spheres are kept.
     let plain = style_text("Hair((file: \"fit.hair\"))", "");
     let loaded = style::parse(&dir.path().join("s.ron"), &plain).unwrap();
-    assert_eq!(loaded.body, loaded.style.head.body);
+    assert_eq!(loaded.body, loaded.style.head.spheres());
 }
 
 #[test]

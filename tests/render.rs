@@ -461,6 +461,7 @@ fn the_body_is_opaque_and_receives_the_hair_shadow() {
         scalp_center: [0.0; 3],
         scalp_radii: [0.0; 3],
         scalp_rotation: [0.0, 0.0, 0.0, 1.0],
+        ..Default::default()
     };
     // A dense wisp above the left half of the sphere (x < 0), lit from above; a strand behind
     // the sphere.

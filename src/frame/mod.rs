@@ -74,6 +74,16 @@ pub struct BodyBuf {
     pub scalp_radii: [f32; 3],
     /// Scalp orientation as a quaternion (x, y, z, w).
     pub scalp_rotation: [f32; 4],
+    /// Capsule bodies: the two ends of each axis, posed, m.
+    pub capsule_ends: Vec<[[f32; 3]; 2]>,
+    /// Capsule radii, m.
+    pub capsule_radii: Vec<f32>,
+    /// Mesh bodies in the rest frame (shared, not copied per frame); `pose_*` places them.
+    pub meshes: Vec<std::sync::Arc<crate::style::obj::TriangleMesh>>,
+    /// The body's pose this frame: translation, m.
+    pub pose_translation: [f32; 3],
+    /// The body's pose this frame: rotation as a quaternion (x, y, z, w).
+    pub pose_rotation: [f32; 4],
 }
 
 /// What an extra primitive set holds.

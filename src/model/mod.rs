@@ -11,6 +11,7 @@ use nalgebra::Vector3;
 
 use crate::style::{Link, LoadedStyle, RawHair, Sphere, StyleError};
 
+pub mod body;
 mod check;
 
 use check::check_strands;
@@ -101,6 +102,8 @@ pub struct HairModel {
     pub scalp_radii: Vector3<f64>,
     /// Collision spheres in the rest pose.
     pub body: Vec<Sphere>,
+    /// The capsules and meshes of the body, in the rest pose.
+    pub colliders: Vec<body::Collider>,
     /// What the import had to tell the user (skipped strands), from [`RawHair::notes`].
     pub notes: Vec<String>,
 }
@@ -138,6 +141,14 @@ impl HairModel {
     /// Builds the hierarchy from raw strands (any source).
     pub fn build(style: &LoadedStyle, hair: &RawHair) -> HairModel {
         let s = &style.style;
+        let colliders: Vec<body::Collider> = style.shapes.iter().map(body::Collider::new).collect();
+        let pushed;
+        let hair = if s.head.push_roots_out {
+            pushed = body::push_roots_out(hair, &colliders);
+            &pushed
+        } else {
+            hair
+        };
         let k = s.hierarchy.cross_sections;
         let n = hair.strands.len();
         // 1. Resample every strand to K points, uniform in arc length.
@@ -258,6 +269,7 @@ impl HairModel {
             scalp_center: Vector3::from(style.scalp.center),
             scalp_radii: Vector3::from(style.scalp.radii),
             body: style.body.clone(),
+            colliders,
             notes: hair.notes.clone(),
         }
     }

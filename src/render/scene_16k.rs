@@ -116,6 +116,7 @@ pub fn zhang_16k_body() -> BodyBuf {
         scalp_center: SCALP_C,
         scalp_radii: SCALP_R,
         scalp_rotation: [0.0, 0.0, 0.0, 1.0],
+        ..Default::default()
     }
 }
 

@@ -15,6 +15,7 @@
 //! | `layered` | Plante, Cani, Poulin 2002, *Capturing the Complexity of Hair Motion* | [`layered`] |
 //! | `guides` | Chang, Jin, Yu 2002, *A practical model for hair mutual interactions* | [`guides`] |
 
+pub mod body;
 pub mod common;
 pub mod guides;
 pub mod layered;

@@ -10,6 +10,7 @@
 //! | `/hair/awt/segments` | `Capsules3D`: active segments with the child's radius, class id = child level |
 //! | `/hair/strands` | `LineStrips3D`: the rendered strands |
 //! | `/body/spheres` | `Ellipsoids3D`: collision spheres, wireframe |
+//! | `/body/capsules`, `/body/mesh` | `Capsules3D`; `Mesh3D` (static) + `Transform3D` per frame |
 //! | `/head/scalp` | `Ellipsoids3D`: the scalp ellipsoid, rotated |
 //! | `/events/split`, `/events/merge` | `TextLog` per event + `Points3D` markers in the frame of the event |
 //! | `/stats/...`, `/params/...` | `Scalars` |
@@ -19,6 +20,7 @@
 //! viewer slows down with thousands of entities.
 
 mod blueprint;
+mod body_shapes;
 mod colors;
 pub mod paths;
 mod runs_layout;
@@ -190,6 +192,7 @@ pub struct Logger {
     seg_colors: Vec<Color>,
     /// Series styles already logged for solver-specific stats.
     styled: Vec<(StatGroup, &'static str)>,
+    shapes: body_shapes::BodyShapes,
 }
 
 impl Logger {
@@ -232,6 +235,7 @@ impl Logger {
             node_colors: Vec::new(),
             seg_colors: Vec::new(),
             styled: Vec::new(),
+            shapes: body_shapes::BodyShapes::new(&setup.prefix),
         };
         logger.set_time(0, 0.0);
         logger.log_message(
@@ -384,7 +388,7 @@ impl Logger {
                 .with_colors([Color::from_rgb(r, g, bl)])
                 .with_fill_mode(FillMode::Solid),
         )?;
-        Ok(())
+        self.shapes.log(&self.rec, b)
     }
 
     fn log_events(&mut self, frame: &Frame) -> anyhow::Result<()> {

@@ -33,6 +33,10 @@ pub const INSPECT: &str = "/inspect";
 pub const STRANDS: &str = "/hair/strands";
 /// The body's collision spheres.
 pub const BODY_SPHERES: &str = "/body/spheres";
+/// The body's capsules.
+pub const BODY_CAPSULES: &str = "/body/capsules";
+/// The body's meshes (one `Mesh3D`, static, moved by a transform every frame).
+pub const BODY_MESH: &str = "/body/mesh";
 /// The scalp ellipsoid.
 pub const SCALP: &str = "/head/scalp";
 /// Split events (`/events/<kind>` for every [`crate::report::EventKind`]).

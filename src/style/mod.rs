@@ -4,6 +4,7 @@
 //! imports (TressFX `.tfx`, Cem Yuksel `.hair`, USC-HairSalon `.data`) the strands that the
 //! multiresolution model (`crate::model`) is built from.
 
+pub mod body;
 pub mod builtin;
 pub mod generate;
 pub mod guides_section;
@@ -11,6 +12,7 @@ pub mod hair_file;
 pub mod hairsalon;
 pub mod import;
 pub mod layered_section;
+pub mod obj;
 pub mod render_params;
 pub mod scalp;
 pub mod schema;
@@ -101,10 +103,13 @@ pub struct LoadedStyle {
     pub path: PathBuf,
     /// The style.
     pub style: Style,
-    /// Collision spheres after resolving `TressFx.project`, if any (else `style.head.body`).
+    /// Collision spheres after resolving `TressFx.project`, if any (else the spheres of
+    /// `style.head.body`).
     pub body: Vec<Sphere>,
     /// The scalp in force: `head.scalp`, else on the fitted head (`fit_body`), else the default.
     pub scalp: Ellipsoid,
+    /// The capsules and meshes of `style.head.body`, meshes read from their files.
+    pub shapes: Vec<body::Shape>,
 }
 
 /// One strand before resampling: its top-level wisp and its polyline, root first.
@@ -166,18 +171,20 @@ pub fn parse(path: &Path, text: &str) -> Result<LoadedStyle, StyleError> {
                 let proj = resolve(path, p);
                 tfx::load_project_spheres(&proj, t.scale, t.translate)?
             }
-            None => style.head.body.clone(),
+            None => style.head.spheres(),
         },
         Hair::Generated(_) | Hair::HairFile(_) | Hair::HairSalon(_) | Hair::Explicit(_) => {
-            style.head.body.clone()
+            style.head.spheres()
         }
     };
     let scalp = style.head.scalp();
+    let shapes = body::load_shapes(path, &style.head.body)?;
     let mut loaded = LoadedStyle {
         path: path.to_path_buf(),
         style,
         body,
         scalp,
+        shapes,
     };
     if loaded.style.head.fit_body {
         // The roots are only known once the strands are read (a second read, when the model is
@@ -384,10 +391,7 @@ fn validate_head(style: &Style) -> Result<(), Invalid> {
     for (a, r) in scalp.radii.iter().enumerate() {
         positive(*r, &format!("head.scalp.radii[{a}]"))?;
     }
-    for (n, s) in h.body.iter().enumerate() {
-        finite3(&s.center, &format!("head.body[{n}].center"))?;
-        positive(s.radius, &format!("head.body[{n}].radius"))?;
-    }
+    body::validate(&h.body)?;
 
     Ok(())
 }

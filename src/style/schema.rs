@@ -6,6 +6,8 @@
 
 use serde::{Deserialize, Serialize};
 
+pub use super::body::{BodyItem, Capsule, MeshRef};
+
 /// A 3-vector in a style file: `(x, y, z)`.
 pub type Vec3 = [f64; 3];
 
@@ -66,23 +68,30 @@ pub struct Head {
         skip_serializing_if = "Option::is_none"
     )]
     pub scalp: Option<Ellipsoid>,
-    /// Collision spheres of the head and body, moving with the character.
+    /// Collision bodies of the head and body, moving with the character: spheres
+    /// `(center: .., radius: ..)` (or `Sphere(..)`), `Capsule(a: .., b: .., radius: ..)` and
+    /// `Mesh(file: .., scale: .., translate: .., up: Y|Z)` (see [`super::body`]).
     /// Default: a head sphere just inside the scalp, a neck and two shoulders/torso spheres.
-    #[serde(default = "default_body")]
-    pub body: Vec<Sphere>,
+    #[serde(default = "super::body::default_body")]
+    pub body: Vec<BodyItem>,
     /// Replace `body` by one sphere fitted to the strands' roots (least squares, shrunk so
     /// that every root lies on or outside it). For imported hair whose head is not given.
     /// Default false.
     #[serde(default)]
     pub fit_body: bool,
+    /// Move strand roots that lie inside a mesh body onto its surface along its normal, at
+    /// load. Default false.
+    #[serde(default)]
+    pub push_roots_out: bool,
 }
 
 impl Default for Head {
     fn default() -> Self {
         Head {
             scalp: None,
-            body: default_body(),
+            body: super::body::default_body(),
             fit_body: false,
+            push_roots_out: false,
         }
     }
 }
@@ -92,31 +101,6 @@ pub(super) fn default_scalp() -> Ellipsoid {
         center: [0.0, 1.6, 0.0],
         radii: [0.075, 0.095, 0.09],
     }
-}
-
-fn default_body() -> Vec<Sphere> {
-    vec![
-        Sphere {
-            center: [0.0, 1.6, 0.0],
-            radius: 0.072,
-        },
-        Sphere {
-            center: [0.0, 1.47, -0.01],
-            radius: 0.05,
-        },
-        Sphere {
-            center: [0.0, 1.25, -0.02],
-            radius: 0.15,
-        },
-        Sphere {
-            center: [0.12, 1.36, -0.02],
-            radius: 0.07,
-        },
-        Sphere {
-            center: [-0.12, 1.36, -0.02],
-            radius: 0.07,
-        },
-    ]
 }
 
 /// An axis-aligned ellipsoid.

@@ -32,6 +32,7 @@ fn sphere_prims(view: &View) -> Vec<super::super::body::Prim> {
         scalp_center: [0.0, 0.0, 0.0],
         scalp_radii: [0.0; 3],
         scalp_rotation: [0.0, 0.0, 0.0, 1.0],
+        ..Default::default()
     };
     let mut prims = Vec::new();
     super::super::body::prims(&body, view, 64.0, 64.0, &mut prims);

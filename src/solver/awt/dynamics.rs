@@ -242,7 +242,14 @@ pub fn rigid_velocities(s: &mut Slots, dt: f64) {
 /// After the body pushed nodes out: a root-to-tip pass that restores rigid lengths while staying
 /// out of the spheres (the nearest point at link length from the parent on the sphere surface).
 /// A node that had to be moved takes the obstacle's velocity (static friction, §4.3).
-pub fn restore_lengths_outside(s: &mut Slots, spheres: &[BodySphere], pose: &Pose) {
+/// The body's capsules and meshes (`colliders`) get the same treatment, by a push along their
+/// normal and the length put back, a few rounds.
+pub fn restore_lengths_outside(
+    s: &mut Slots,
+    spheres: &[BodySphere],
+    colliders: &[crate::solver::body::Collider],
+    pose: &Pose,
+) {
     for c in 0..s.len() {
         let pa = s.parent[c];
         if pa == NO_SLOT {
@@ -289,6 +296,22 @@ pub fn restore_lengths_outside(s: &mut Slots, spheres: &[BodySphere], pose: &Pos
             }
             if !moved {
                 break;
+            }
+        }
+        if !colliders.is_empty() {
+            for round in 0..4 {
+                let Some((y, _)) = crate::solver::body::push_out(colliders, pose, &x, 0.0) else {
+                    break;
+                };
+                touched = true;
+                x = y;
+                // Back to link length from the parent, unless this is the last round (outside
+                // wins over the exact length, as in the crease between spheres).
+                let d = x - p;
+                let n = d.norm();
+                if round < 3 && n > 1e-12 {
+                    x = p + d * (len / n);
+                }
             }
         }
         s.pos[c] = x;

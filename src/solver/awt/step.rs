@@ -100,7 +100,7 @@ impl Simulation {
             let view = s.segs.view();
             collide::resolve_body(&view, &mut s.pos, &mut s.vel, &self.spheres, |x| {
                 pose.velocity_at(&Point3::from(*x))
-            })
+            }) + collide::resolve_shapes(&view, &mut s.pos, &mut s.vel, &self.model.colliders, pose)
         };
         {
             // Static friction (§4.3): a node the body pushed keeps its place on the body, i.e.
@@ -116,6 +116,7 @@ impl Simulation {
                         .spheres
                         .iter()
                         .all(|sp| (held - sp.center).norm() >= sp.radius)
+                        && !crate::solver::body::inside(&self.model.colliders, pose, &held)
                     {
                         s.pos[c] = held;
                     }
@@ -123,7 +124,12 @@ impl Simulation {
             }
         }
         if matches!(self.link, Link::Rigid { .. }) {
-            dynamics::restore_lengths_outside(&mut self.slots, &self.spheres, pose);
+            dynamics::restore_lengths_outside(
+                &mut self.slots,
+                &self.spheres,
+                &self.model.colliders,
+                pose,
+            );
             dynamics::rigid_velocities(&mut self.slots, dt);
         }
         dynamics::update_accelerations(&mut self.slots, dt, self.params.accel_smoothing);
@@ -149,7 +155,12 @@ impl Simulation {
                 // New links join followed positions, which need not be at rest length (and a
                 // followed node may sit inside the body): one exact pass ends the step valid.
                 if matches!(self.link, Link::Rigid { .. }) {
-                    dynamics::restore_lengths_outside(&mut self.slots, &self.spheres, &self.pose);
+                    dynamics::restore_lengths_outside(
+                        &mut self.slots,
+                        &self.spheres,
+                        &self.model.colliders,
+                        &self.pose,
+                    );
                 } else {
                     let s = &mut self.slots;
                     let view = s.segs.view();
@@ -157,6 +168,13 @@ impl Simulation {
                     collide::resolve_body(&view, &mut s.pos, &mut s.vel, &self.spheres, |x| {
                         pose.velocity_at(&Point3::from(*x))
                     });
+                    collide::resolve_shapes(
+                        &view,
+                        &mut s.pos,
+                        &mut s.vel,
+                        &self.model.colliders,
+                        pose,
+                    );
                 }
             }
         }

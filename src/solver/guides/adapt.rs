@@ -137,6 +137,10 @@ impl GuideSolver {
             &mut vel,
             &lens,
             &self.spheres,
+            &super::body::Shapes {
+                colliders: &self.model.colliders,
+                pose: self.shape_pose,
+            },
             self.gp.body_margin,
             0.0,
         );
@@ -154,6 +158,10 @@ impl GuideSolver {
                 &mut v,
                 &lens,
                 &self.spheres,
+                &super::body::Shapes {
+                    colliders: &self.model.colliders,
+                    pose: self.shape_pose,
+                },
                 self.gp.body_margin,
                 0.0,
             );

@@ -34,6 +34,23 @@ impl PosedSphere {
     }
 }
 
+/// The body's capsules and meshes and the pose that places them (see
+/// [`crate::solver::body`]): corrected against after the spheres, with the same response.
+#[derive(Clone, Copy)]
+pub struct Shapes<'a> {
+    /// The shapes, in the rest frame.
+    pub colliders: &'a [crate::solver::body::Collider],
+    /// Where they are.
+    pub pose: crate::motion::Pose,
+}
+
+impl Shapes<'_> {
+    fn within(&self, x: &Vector3<f64>, margin: f64) -> bool {
+        crate::solver::body::probe(self.colliders, &self.pose, x, margin)
+            .is_some_and(|p| p.distance < margin)
+    }
+}
+
 /// Whether `x` is within `margin` of a sphere: the index of the deepest one.
 pub fn inside(spheres: &[PosedSphere], x: &Vector3<f64>, margin: f64) -> Option<usize> {
     let mut best: Option<(f64, usize)> = None;
@@ -56,10 +73,12 @@ pub fn correct(
     v: &mut [Vector3<f64>],
     lens: &[f64],
     spheres: &[PosedSphere],
+    shapes: &Shapes,
     margin: f64,
     friction: f64,
 ) -> usize {
-    let Some(first) = (1..x.len()).find(|&i| inside(spheres, &x[i], margin).is_some()) else {
+    let hit = |p: &Vector3<f64>| inside(spheres, p, margin).is_some() || shapes.within(p, margin);
+    let Some(first) = (1..x.len()).find(|&i| hit(&x[i])) else {
         return 0;
     };
     let mut pushed = 0;
@@ -77,6 +96,17 @@ pub fn correct(
                 .unwrap_or_else(Vector3::y);
             p = s.center + nrm * (s.radius + margin);
             let vb = s.velocity_at(&p);
+            let rel = v[i] - vb;
+            let vn = rel.dot(&nrm);
+            let vt = rel - nrm * vn;
+            v[i] = vb + nrm * vn.max(0.0) + vt * (1.0 - friction);
+            pushed += 1;
+        }
+        if let Some((q, nrm)) =
+            crate::solver::body::push_out(shapes.colliders, &shapes.pose, &p, margin)
+        {
+            p = q;
+            let vb = shapes.pose.velocity_at(&nalgebra::Point3::from(p));
             let rel = v[i] - vb;
             let vn = rel.dot(&nrm);
             let vt = rel - nrm * vn;

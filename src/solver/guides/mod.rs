@@ -90,6 +90,8 @@ pub struct GuideSolver {
     pose: Pose,
     settling: bool,
     spheres: Vec<PosedSphere>,
+    /// The pose of the body's capsules and meshes (with `spheres`).
+    shape_pose: Pose,
     buf: Vec<Vector3<f64>>,
     vbuf: Vec<Vector3<f64>>,
     disp: Vec<Vector3<f64>>,
@@ -188,6 +190,7 @@ impl GuideSolver {
             pose: motion.pose(0.0),
             settling: false,
             spheres: Vec::new(),
+            shape_pose: Pose::identity(),
             buf: vec![Vector3::zeros(); n + 1],
             vbuf: vec![Vector3::zeros(); n + 1],
             disp: vec![Vector3::zeros(); cap * (n + 1)],
@@ -223,6 +226,10 @@ impl GuideSolver {
                 &mut vel,
                 &lens,
                 &rest_spheres,
+                &body::Shapes {
+                    colliders: &s.model.colliders,
+                    pose: Pose::identity(),
+                },
                 s.gp.body_margin,
                 0.0,
             );
@@ -409,6 +416,7 @@ impl GuideSolver {
 
     /// The body spheres at `pose` and the obstacles (`guides.obstacles`) at time `t`.
     fn posed_spheres(&mut self, pose: &Pose, t: f64) {
+        self.shape_pose = *pose;
         self.spheres.clear();
         for sp in &self.model.body {
             let c = pose.transform_point(&Point3::from(Vector3::from(sp.center)));
@@ -516,6 +524,10 @@ impl GuideSolver {
                     &mut self.vbuf,
                     &self.chains.len[g * n..(g + 1) * n],
                     &self.spheres,
+                    &body::Shapes {
+                        colliders: &self.model.colliders,
+                        pose: self.shape_pose,
+                    },
                     self.gp.body_margin,
                     // Friction once per sub-step, as §3.3 has it: the later passes only move.
                     if pass == 0 {

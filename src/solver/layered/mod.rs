@@ -18,6 +18,7 @@ pub mod detect;
 pub mod forces;
 pub mod params;
 pub mod response;
+pub mod shapes;
 pub mod strands;
 pub mod tunables;
 pub mod wisp;
@@ -316,6 +317,11 @@ impl Solver for LayeredSolver {
             let drag = response::scaled_fraction(lp.body_friction, dt, dt_c);
             body_contacts =
                 body::sliding_contact(w, &self.balls, &self.pose, lp.body_threshold, drag);
+            let shapes = &self.model.colliders;
+            if !shapes.is_empty() {
+                body_contacts +=
+                    shapes::sliding_contact(w, shapes, &self.pose, lp.body_threshold, drag);
+            }
         }
         // 4. Positions, then position modifications.
         forces::integrate_positions(w, dt);
@@ -325,6 +331,9 @@ impl Solver for LayeredSolver {
             // `sync_display` recompute every frame anyway).
             let margin = 0.9 * lp.body_threshold;
             body::penetration_reaction_framing(w, &self.balls, &self.pose, margin);
+            if !self.model.colliders.is_empty() {
+                shapes::penetration_reaction(w, &self.model.colliders, &self.pose, margin);
+            }
         }
         self.time = t_new;
         self.steps += 1;

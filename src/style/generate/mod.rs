@@ -52,10 +52,11 @@ pub fn generate(style: &Style, g: &Generated) -> Result<RawHair, Invalid> {
             )
         })?;
     let scalp = style.head.scalp();
+    let spheres = style.head.spheres();
     let mut grower = Generator {
         seed: style.seed,
         scalp: &scalp,
-        body: &style.head.body,
+        body: &spheres,
         samples: g.samples,
         min_per_tile,
         hair: RawHair::default(),

@@ -174,3 +174,29 @@ pub(super) fn exit_union(x: &Vector3<f64>, spheres: &[BodySphere]) -> Option<Vec
     );
     Some(p)
 }
+
+/// AWT §4.3's response against the body's capsules and meshes: a child node inside one is put
+/// on its surface along the normal and given the obstacle's velocity, as for a sphere. Returns
+/// the nodes pushed. (The tangent rotation about the parent is sphere geometry; for these
+/// shapes the child alone is kept out, as for a parent inside a sphere.)
+pub fn resolve_shapes(
+    segs: &SegmentsView,
+    pos: &mut [Vector3<f64>],
+    vel: &mut [Vector3<f64>],
+    colliders: &[crate::solver::body::Collider],
+    pose: &crate::motion::Pose,
+) -> u32 {
+    if colliders.is_empty() {
+        return 0;
+    }
+    let mut pushed = 0;
+    for i in 0..segs.len() {
+        let ci = segs.child[i] as usize;
+        if let Some((x, _)) = crate::solver::body::push_out(colliders, pose, &pos[ci], 0.0) {
+            pos[ci] = x;
+            vel[ci] = pose.velocity_at(&nalgebra::Point3::from(x));
+            pushed += 1;
+        }
+    }
+    pushed
+}
