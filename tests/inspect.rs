@@ -142,6 +142,21 @@ fn the_inspected_accel_radius_crosses_the_threshold_at_the_frame_of_the_split() 
         rrd::scalars(&chunks, &format!("/inspect/{}/active", id.path())).len(),
         FRAMES
     );
+    // The node is ringed in the 3D view every frame: one ellipsoid at its logged position.
+    let ring = rrd::rows(
+        &chunks,
+        "/hair/awt/inspected",
+        rerun::Ellipsoids3D::descriptor_centers().component,
+    );
+    assert_eq!(
+        ring.len(),
+        FRAMES,
+        "the inspected node's ring, frame by frame"
+    );
+    assert!(ring.iter().all(|&(_, n)| n == 1), "{ring:?}");
+    let y = rrd::scalars(&chunks, &format!("/inspect/{}/position_y", id.path()));
+    let h = rrd::scalars(&chunks, &format!("/inspect/{}/height", id.path()));
+    assert_eq!(y, h, "position_y is the height");
 }
 
 #[test]
@@ -193,5 +208,79 @@ fn node_ids_parse_and_name_their_path() {
     assert_eq!(id.path(), "3/1/42");
     for bad in ["", "1:2", "1:2:3:4", "-1:0:0", "a:b:c", "1.5:0:0"] {
         assert!(NodeId::parse(bad).is_err(), "{bad}");
+    }
+}
+
+#[test]
+fn a_node_clicked_in_the_view_is_the_one_drawn_there() {
+    let scene = Scene::load(STYLE, MOTION, SolverKind::Awt).unwrap();
+    let mut s = scene.solver();
+    let mut r = s.new_report();
+    for _ in 0..12 * s.steps_per_frame() {
+        s.step(&mut r);
+    }
+    let mut frame = wisptree::frame::Frame::default();
+    s.draw(&mut frame);
+    let nodes = &frame.nodes;
+    assert!(
+        nodes.positions.len() > 20,
+        "{} nodes drawn",
+        nodes.positions.len()
+    );
+    let mut v = Vec::new();
+    for c in (0..nodes.positions.len()).step_by(7) {
+        // By instance: the node drawn as instance c, whose inspected position is c's centre.
+        let id = s
+            .pick_node(Some(c), None)
+            .expect("a drawn instance names a node");
+        assert_eq!(id.level, nodes.levels[c] as usize, "instance {c}");
+        s.inspect(&id, &mut v).unwrap();
+        assert_eq!(get(&v, "active"), 1.0, "{id:?}: a drawn node is active");
+        let p = nodes.positions[c].map(|x| x as f64);
+        for (k, axis) in ["position_x", "position_y", "position_z"]
+            .iter()
+            .enumerate()
+        {
+            assert!((get(&v, axis) - p[k]).abs() < 1e-5, "{id:?} {axis}");
+        }
+        // By the point clicked on its sphere (the top of it): a node whose sphere passes
+        // through that point.
+        let r = nodes.radii[c] as f64;
+        let click = [p[0], p[1] + r, p[2]];
+        let hit = s.pick_node(None, Some(click)).unwrap();
+        s.inspect(&hit, &mut v).unwrap();
+        let centre = [
+            get(&v, "position_x"),
+            get(&v, "position_y"),
+            get(&v, "position_z"),
+        ];
+        let d = (0..3)
+            .map(|k| (centre[k] - click[k]).powi(2))
+            .sum::<f64>()
+            .sqrt();
+        assert!(
+            (d - get(&v, "radius")).abs() < 1e-4,
+            "clicked {click:?} on {c}: picked {hit:?} whose surface is {} m away",
+            (d - get(&v, "radius")).abs()
+        );
+    }
+    assert_eq!(s.pick_node(Some(nodes.positions.len()), None), None);
+    // The other models have no inspector, and pick nothing.
+    let layered = Scene::load(STYLE, MOTION, SolverKind::Layered)
+        .unwrap()
+        .solver();
+    assert_eq!(layered.pick_node(Some(0), Some([0.0, 1.6, 0.0])), None);
+}
+
+#[test]
+fn every_node_name_resolves_back_to_its_node() {
+    let scene = Scene::load("long", "lean", SolverKind::Awt).unwrap();
+    let m = &scene.model;
+    for l in 0..m.level_count() {
+        for j in 0..m.levels[l].gc_count() * m.k {
+            let id = NodeId::of(m, l, j);
+            let (g, i) = wisptree::solver::awt::inspect::resolve(m, &id).unwrap();
+            assert_eq!(g * m.k + i, j, "{id:?}");
+        }
     }
 }

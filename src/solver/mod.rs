@@ -302,4 +302,12 @@ pub trait Solver: Send {
             self.kind().name()
         ))
     }
+
+    /// The node a user clicked in the 3D view: with a point (`near`, m), the drawn node whose
+    /// sphere surface is nearest it; else the one drawn as `instance` of the frame's nodes
+    /// ([`Solver::draw`] order). `None` when there is no such node or no inspector.
+    fn pick_node(&self, instance: Option<usize>, near: Option<[f64; 3]>) -> Option<NodeId> {
+        let _ = (instance, near);
+        None
+    }
 }
