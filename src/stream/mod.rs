@@ -15,7 +15,7 @@
 //! | `/events/split`, `/events/merge` | `TextLog` per event + `Points3D` markers in the frame of the event |
 //! | `/stats/...`, `/params/...` | `Scalars` |
 //! | `/inspect/<tree>/<level>/<index>/<name>` | `Scalars`: the inspected node's numbers |
-//! | `/hair/awt/inspected` | `Ellipsoids3D`: a ring around the inspected node |
+//! | `/hair/inspected` | `Ellipsoids3D`: a ring around the inspected node |
 //! | `/log` | `TextLog`: free-text messages |
 //!
 //! Every entity holds all its instances (one row per frame), never one entity per node: the
