@@ -82,11 +82,14 @@ fn main() -> anyhow::Result<()> {
             println!(
                 "round {round} {q:?}: {style}: {} colliders, {} spheres; built in {build_ms:.0} ms{field}; \
                  {steps} steps: step {:.3} ms, obstacles {o:.3} ms ({share:.1} % of the step), \
-                 body contacts {:.0} per step",
+                 body contacts {:.0} per step, {:.0} active nodes, {} splits, {} merges",
                 sc.model.colliders.len(),
                 sc.model.body.len(),
                 r.mean_ms_per_step,
-                r.mean_body_contacts
+                r.mean_body_contacts,
+                r.mean_active_nodes,
+                r.splits,
+                r.merges
             );
             stats[qi][0].push(r.mean_ms_per_step);
             stats[qi][1].push(o);
