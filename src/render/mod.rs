@@ -77,6 +77,7 @@ use crate::simd::Level;
 use camera::{normalize, ScreenVertex, View};
 use raster::{Bins, Grid, TILE};
 use shading::{srgb3_to_linear, HairShader};
+pub use stages::StageTimes;
 use stages::{
     count_half, fill_half, project_points, render_tile, shade_strands, split_by_strands, TileSetup,
 };
@@ -91,28 +92,6 @@ pub struct RenderInput<'a> {
     pub strands: &'a StrandBuf,
     /// Spheres, capsules and scalp ellipsoid as posed; meshes in the rest frame with the pose.
     pub body: &'a BodyBuf,
-}
-
-/// Each stage's share of the last frame's wall-clock time (its share of the work done by all
-/// threads; on one thread, the time it took).
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
-pub struct StageTimes {
-    /// Building the 16 opacity shadow maps.
-    pub shadow_maps: Duration,
-    /// Projecting every strand point, and shading those that binned segments use.
-    pub shading: Duration,
-    /// Casting the body into the tiles, binning the segments, then the tile pass's sorting
-    /// and blending.
-    pub rasterising: Duration,
-    /// The tile pass's resolve (body shading, filters, sRGB) and the copy to the image.
-    pub resolve: Duration,
-}
-
-impl StageTimes {
-    /// All stages.
-    pub fn total(&self) -> Duration {
-        self.shadow_maps + self.shading + self.rasterising + self.resolve
-    }
 }
 
 /// Threads a renderer should use: every core (`WISPTREE_RENDER_THREADS` overrides, 1 to 64).
