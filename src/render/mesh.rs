@@ -62,7 +62,7 @@ const MIN_COS: f32 = 0.25;
 /// A triangle's tiles: its screen box in tile units, clipped to the grid; `None` if it is not
 /// drawn (a vertex at or behind the near plane, or the box off the image).
 fn tile_box(s: [[f32; 3]; 3], grid: &Grid) -> Option<[usize; 4]> {
-    if s.iter().any(|v| !(v[2] > NEAR)) {
+    if !s.iter().all(|v| v[2] > NEAR) {
         return None;
     }
     let span = (TILE * grid.ss) as f32;
@@ -250,7 +250,7 @@ pub(crate) fn cast(
         // Twice the signed area; its sign is the triangle's orientation on screen.
         let area =
             (s[1][0] - s[0][0]) * (s[2][1] - s[0][1]) - (s[1][1] - s[0][1]) * (s[2][0] - s[0][0]);
-        if !(area.abs() > 1e-12) {
+        if area.is_nan() || area.abs() <= 1e-12 {
             continue;
         }
         let orient = if area > 0.0 { 1.0f32 } else { -1.0 };
@@ -281,7 +281,7 @@ pub(crate) fn cast(
                 }
                 let sum = w[0] + w[1] + w[2];
                 let iz = w[0] * inv_z[0] + w[1] * inv_z[1] + w[2] * inv_z[2];
-                if !(iz > 0.0) {
+                if iz.is_nan() || iz <= 0.0 {
                     continue;
                 }
                 let t = sum / iz + slack;

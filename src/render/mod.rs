@@ -443,8 +443,11 @@ impl Renderer {
                             grid.tile_samples(),
                             origin,
                             view,
-                            prims,
-                            (meshes, meshes.tile(t0 + j)),
+                            tile::BodyParts {
+                                prims,
+                                mesh: meshes,
+                                tris: meshes.tile(t0 + j),
+                            },
                             layer,
                         );
                     }

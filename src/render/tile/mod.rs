@@ -284,6 +284,15 @@ multiversion! {
     }
 }
 
+/// What a tile's body cast draws: the ray-cast primitives (spheres, capsules, the scalp), and
+/// the mesh triangles that reach the tile.
+#[derive(Clone, Copy)]
+pub(crate) struct BodyParts<'a> {
+    pub prims: &'a [super::body::Prim],
+    pub mesh: &'a super::mesh::Meshes,
+    pub tris: &'a [u32],
+}
+
 multiversion! {
     /// [`TileBuf::cast_layer`], compiled for AVX2 too (eight samples at a time).
     pub(crate) fn cast_layer(
@@ -291,11 +300,10 @@ multiversion! {
         n: usize,
         origin: (i32, i32),
         view: &View,
-        prims: &[super::body::Prim],
-        mesh: (&super::mesh::Meshes, &[u32]),
+        parts: BodyParts,
         layer: &mut BodyLayer,
     ) {
-        buf.cast_layer(n, origin, view, prims, mesh, layer);
+        buf.cast_layer(n, origin, view, parts, layer);
     }
 }
 
@@ -309,8 +317,7 @@ impl TileBuf {
         n: usize,
         (ox, oy): (i32, i32),
         view: &View,
-        prims: &[super::body::Prim],
-        (mesh, tris): (&super::mesh::Meshes, &[u32]),
+        BodyParts { prims, mesh, tris }: BodyParts,
         layer: &mut BodyLayer,
     ) {
         // Only the body part of the buffer: its samples are not used here.

@@ -24,8 +24,11 @@ fn sphere_tile() -> (View, BodyLayer) {
         64,
         (0, 0),
         &view,
-        &sphere_prims(&view),
-        (&Default::default(), &[]),
+        BodyParts {
+            prims: &sphere_prims(&view),
+            mesh: &Default::default(),
+            tris: &[],
+        },
         &mut layer,
     );
     (view, layer)
@@ -96,7 +99,12 @@ fn a_tile_without_hair_resolves_as_if_cleared_without_reading_its_samples() {
         let cast = || {
             let (mut scratch, mut layer) = (TileBuf::default(), BodyLayer::default());
             let p: &[super::super::body::Prim] = if with_body { &prims } else { &[] };
-            scratch.cast_layer(64, (0, 0), &view, p, (&Default::default(), &[]), &mut layer);
+            let parts = BodyParts {
+                prims: p,
+                mesh: &Default::default(),
+                tris: &[],
+            };
+            scratch.cast_layer(64, (0, 0), &view, parts, &mut layer);
             layer
         };
         let mut cleared = TileBuf::default();
