@@ -54,43 +54,70 @@ impl Strips {
                     }
                 }
             };
-        for &g in alive {
-            for i in 0..n {
-                let l = g * n + i;
-                let v = g * (n + 1) + i;
-                let (p, q) = (chains.x[v], chains.x[v + 1]);
-                let (lo, hi) = (p.inf(&q) - half, p.sup(&q) + half);
-                self.seg_box[l] = (lo, hi);
-                self.seg_cell[l] = cell_of(&lo, h);
-                let t = q - p;
-                self.seg_dir[l] = t / t.norm();
-                push_cells(&mut self.entries, &lo, &hi, l as u32);
-                let x = chains.x[v + 1];
-                self.vkeys.push((cell_key(cell_of(&x, h)), (v + 1) as u32));
+        // The segments' and the triangles' boxes, cells and sorted entries touch different
+        // buffers: one thread each.
+        let segs = Mutex::new((
+            &mut self.seg_box,
+            &mut self.seg_cell,
+            &mut self.seg_dir,
+            &mut self.entries,
+            &mut self.vkeys,
+            &mut self.sbox,
+        ));
+        let tris = Mutex::new((
+            &mut self.tri_box,
+            &mut self.tri_dir,
+            &mut self.tri_prism,
+            &mut self.tri_entries,
+            &mut self.ebox,
+        ));
+        let (tri, broken, tangents) = (&self.tri, &self.broken, &self.tangents);
+        for_each_on(pool, 2, &|part| {
+            if part == 0 {
+                let mut guard = tris.lock().unwrap_or_else(|e| e.into_inner());
+                let (tri_box, tri_dir, tri_prism, tri_entries, ebox) = &mut *guard;
+                let full = Vector3::repeat(reach);
+                for t in 0..tri.len() {
+                    if broken[t] {
+                        continue;
+                    }
+                    let tp = tri[t].map(|v| chains.x[v as usize]);
+                    let [a, b, c] = tp;
+                    let (lo, hi) = (a.inf(&b).inf(&c) - full, a.sup(&b).sup(&c) + full);
+                    tri_box[t] = (lo, hi);
+                    let mut dir = Vector3::zeros();
+                    for w in tri[t] {
+                        dir += tangents[w as usize];
+                    }
+                    tri_dir[t] = dir.try_normalize(1e-12).unwrap_or_else(Vector3::y);
+                    tri_prism[t] = Prism::new(&tp);
+                    push_cells(tri_entries, &lo, &hi, t as u32);
+                }
+                tri_entries.sort_unstable();
+                fill_boxes(ebox, tri_entries, tri_box);
+            } else {
+                let mut guard = segs.lock().unwrap_or_else(|e| e.into_inner());
+                let (seg_box, seg_cell, seg_dir, entries, vkeys, sbox) = &mut *guard;
+                for &g in alive {
+                    for i in 0..n {
+                        let l = g * n + i;
+                        let v = g * (n + 1) + i;
+                        let (p, q) = (chains.x[v], chains.x[v + 1]);
+                        let (lo, hi) = (p.inf(&q) - half, p.sup(&q) + half);
+                        seg_box[l] = (lo, hi);
+                        seg_cell[l] = cell_of(&lo, h);
+                        let t = q - p;
+                        seg_dir[l] = t / t.norm();
+                        push_cells(entries, &lo, &hi, l as u32);
+                        let x = chains.x[v + 1];
+                        vkeys.push((cell_key(cell_of(&x, h)), (v + 1) as u32));
+                    }
+                }
+                entries.sort_unstable();
+                vkeys.sort_unstable();
+                fill_boxes(sbox, entries, seg_box);
             }
-        }
-        let full = Vector3::repeat(reach);
-        for t in 0..self.tri.len() {
-            if self.broken[t] {
-                continue;
-            }
-            let tp = self.tri[t].map(|v| chains.x[v as usize]);
-            let [a, b, c] = tp;
-            let (lo, hi) = (a.inf(&b).inf(&c) - full, a.sup(&b).sup(&c) + full);
-            self.tri_box[t] = (lo, hi);
-            let mut dir = Vector3::zeros();
-            for w in self.tri[t] {
-                dir += self.tangents[w as usize];
-            }
-            self.tri_dir[t] = dir.try_normalize(1e-12).unwrap_or_else(Vector3::y);
-            self.tri_prism[t] = Prism::new(&tp);
-            push_cells(&mut self.tri_entries, &lo, &hi, t as u32);
-        }
-        self.entries.sort_unstable();
-        self.tri_entries.sort_unstable();
-        self.vkeys.sort_unstable();
-        fill_boxes(&mut self.ebox, &self.tri_entries, &self.tri_box);
-        fill_boxes(&mut self.sbox, &self.entries, &self.seg_box);
+        });
         if self.chunks.len() != CHUNKS {
             self.chunks = (0..CHUNKS).map(|_| Mutex::default()).collect();
         }
@@ -279,21 +306,24 @@ fn fill_boxes(
     entries: &[(u64, u32)],
     boxes: &[(Vector3<f64>, Vector3<f64>)],
 ) {
+    let len = entries.len();
     for b in out.iter_mut() {
         b.clear();
+        b.resize(len + 8, 0.0);
     }
-    for &(_, id) in entries {
-        let (lo, hi) = boxes[id as usize];
-        for k in 0..3 {
-            out[k].push(f32_down(lo[k]));
-            out[k + 3].push(f32_up(hi[k]));
-        }
+    let [lx, ly, lz, hx, hy, hz] = out;
+    for (i, &(_, id)) in entries.iter().enumerate() {
+        let (lo, hi) = &boxes[id as usize];
+        lx[i] = f32_down(lo.x);
+        ly[i] = f32_down(lo.y);
+        lz[i] = f32_down(lo.z);
+        hx[i] = f32_up(hi.x);
+        hy[i] = f32_up(hi.y);
+        hz[i] = f32_up(hi.z);
     }
-    for _ in 0..8 {
-        for k in 0..3 {
-            out[k].push(f32::INFINITY);
-            out[k + 3].push(f32::NEG_INFINITY);
-        }
+    for i in len..len + 8 {
+        (lx[i], ly[i], lz[i]) = (f32::INFINITY, f32::INFINITY, f32::INFINITY);
+        (hx[i], hy[i], hz[i]) = (f32::NEG_INFINITY, f32::NEG_INFINITY, f32::NEG_INFINITY);
     }
 }
 
@@ -311,7 +341,7 @@ fn tail_mask(m: usize) -> u32 {
 /// box `a` (low x, y, z, high x, y, z; a point is a box with low = high), as bits: written
 /// over fixed arrays of eight without a branch so that the compiler makes vector compares of
 /// it on any target.
-#[inline]
+#[inline(always)]
 fn overlap8(a: &[f32; 6], boxes: &[Vec<f32>; 6], i: usize) -> u32 {
     let lane = |k: usize| -> &[f32; 8] {
         boxes[k][i..i + 8]
@@ -336,6 +366,7 @@ fn overlap8(a: &[f32; 6], boxes: &[Vec<f32>; 6], i: usize) -> u32 {
 }
 
 /// The largest `f32` not above `x`.
+#[inline]
 fn f32_down(x: f64) -> f32 {
     let f = x as f32;
     if f as f64 > x {
@@ -346,6 +377,7 @@ fn f32_down(x: f64) -> f32 {
 }
 
 /// The smallest `f32` not below `x`.
+#[inline]
 fn f32_up(x: f64) -> f32 {
     let f = x as f32;
     if (f as f64) < x {
