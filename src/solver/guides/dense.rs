@@ -91,6 +91,8 @@ impl Dense {
     /// more element are among the old nearest and the new one; a strand bound to a guide that
     /// left is searched again in full. The result is the full search's, bit for bit: the same
     /// order `(distance, slot)` decides, and the weights come from the same list.
+    // (`j` indexes the nearest guides and their weights alike.)
+    #[allow(clippy::needless_range_loop)]
     pub fn bind(&mut self, model: &HairModel, roots: &[(usize, Vector3<f64>)]) {
         let same = |a: &(usize, Vector3<f64>), b: &(usize, Vector3<f64>)| a.0 == b.0 && a.1 == b.1;
         let gone: Vec<u32> = self
@@ -134,9 +136,9 @@ impl Dense {
                 if came.is_empty() {
                     continue;
                 }
-                for j in 0..b {
-                    if slots[j] != u32::MAX {
-                        near.push((self.dist[s * b + j], slots[j] as usize));
+                for (&g, &d) in slots.iter().zip(&self.dist[s * b..(s + 1) * b]) {
+                    if g != u32::MAX {
+                        near.push((d, g as usize));
                     }
                 }
                 search(&mut near, &came);

@@ -432,6 +432,16 @@ impl Prism {
         }
     }
 
+    /// [`Prism::near`] with every test evaluated (no branch), the same answer.
+    #[inline]
+    pub(super) fn near_all(&self, x: &Vector3<f64>, r: f64) -> bool {
+        self.flat
+            | (((self.n.dot(x) - self.d).abs() < r)
+                & (self.e[0].dot(x) - self.c[0] < r)
+                & (self.e[1].dot(x) - self.c[1] < r)
+                & (self.e[2].dot(x) - self.c[2] < r))
+    }
+
     /// False only if `x` is at least `r` from the triangle.
     #[inline]
     pub(super) fn near(&self, x: &Vector3<f64>, r: f64) -> bool {
