@@ -1,5 +1,5 @@
-//! The control page's HTTP server: the page itself, the live state as JSON, and one control
-//! endpoint that accepts only the page's own requests from the page's own origin.
+//! The control page's HTTP server: the page itself, the Rerun viewer's script and wasm (which
+//! the page runs), the live state as JSON, and one control endpoint that accepts only the page's own requests from the page's own origin.
 //!
 //! Why so strict: anything on the user's machine (any web page in any tab) can send requests to
 //! a port on 127.0.0.1. A request is taken only when its `Host` names this server (no DNS
