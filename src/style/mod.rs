@@ -7,6 +7,7 @@
 pub mod body;
 pub mod builtin;
 pub mod generate;
+pub mod generated_section;
 pub mod guides_section;
 pub mod hair_file;
 pub mod hairsalon;
@@ -508,6 +509,7 @@ fn validate_hair(style: &Style) -> Result<(), Invalid> {
     match &style.hair {
         Hair::Generated(g) => {
             positive(g.density, "hair.density")?;
+            non_negative(g.fan_out, "hair.fan_out")?;
             check(g.samples >= 2, "hair.samples", || {
                 format!("needs at least 2 samples per strand, got {}", g.samples)
             })?;

@@ -6,6 +6,8 @@
 //! centre) translated to each member root, plus an offset that grows linearly from zero at the root
 //! to at most `tip_spread` at the tip, applied in a rotation-minimising frame of the key strand
 //! (the paper's "torsion minimising reference frame"), plus an optional helix (curl).
+//! With `fan_out`, each member is then turned about the scalp's vertical axis by its root's
+//! azimuth from the tile centre, fading out along the strand, so that tiles meet at the crown.
 //!
 //! Everything random comes from a SplitMix64 stream seeded from `style.seed` and the wisp/tile
 //! index, so the same style gives bit-identical strands and each tile's strands do not depend
@@ -58,6 +60,7 @@ pub fn generate(style: &Style, g: &Generated) -> Result<RawHair, Invalid> {
         scalp: &scalp,
         body: &spheres,
         samples: g.samples,
+        fan_out: g.fan_out,
         min_per_tile,
         hair: RawHair::default(),
         points: 0,
@@ -156,6 +159,7 @@ struct Generator<'a> {
     scalp: &'a Ellipsoid,
     body: &'a [Sphere],
     samples: usize,
+    fan_out: f64,
     min_per_tile: usize,
     hair: RawHair,
     points: usize,
@@ -277,6 +281,16 @@ impl Generator<'_> {
         let ramp = (0.25 * length).min(0.03);
         for root in roots {
             let offset = sub(root, centre);
+            // `fan_out`: the turn about the vertical axis that takes the tile centre's meridian
+            // to the root's (the scalp is axis-aligned, so its vertical axis is y), wrapped to
+            // (-π, π]: a tile never spans more than a turn.
+            let turn = if self.fan_out > 0.0 {
+                let d = sub(root, self.scalp.center);
+                let da = d[0].atan2(d[2]) - az_c;
+                da - TAU * (da / TAU).round()
+            } else {
+                0.0
+            };
             let rho = def.tip_spread * rng.next_f64().sqrt();
             let ang = rng.next_f64() * TAU;
             let (o1, o2) = (rho * ang.cos(), rho * ang.sin());
@@ -301,6 +315,12 @@ impl Generator<'_> {
                             scale(rmf_s[j], a * phi.sin()),
                         ),
                     );
+                }
+                if turn != 0.0 {
+                    let a = turn * (1.0 - smoothstep(step * j as f64 / self.fan_out));
+                    let (c, s) = (a.cos(), a.sin());
+                    let r = sub(p, root);
+                    p = add(root, [r[0] * c + r[2] * s, r[1], r[2] * c - r[0] * s]);
                 }
                 points.push(p);
             }
