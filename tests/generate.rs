@@ -192,6 +192,68 @@ fn members_stay_within_their_offset_of_the_translated_key_strand() {
     }
 }
 
+/// `fan_out`: a tile's members turn with their root's azimuth (radially from the crown) over
+/// the given arc length, and run as the unturned key strand below it; 0 (the default) is the
+/// old, unturned hair, bit for bit.
+#[test]
+fn fan_out_turns_members_with_their_azimuth_near_the_root_only() {
+    let wisp = r#"(name: "w", region: (azimuth: (0, 90), elevation: (60, 90)),
+                   key_strand: [(0.03, 0.0, 0.0), (0.08, -0.02, 0.0), (0.25, -0.2, 0.0)],
+                   tip_spread: 0.0)"#;
+    let with =
+        |fan: &str| one_wisp(5, wisp, "").replace("samples: 24,", &format!("samples: 24, {fan}"));
+    let plain = grow(&parse(&one_wisp(5, wisp, "")));
+    let zero = grow(&parse(&with("fan_out: 0,")));
+    assert_eq!(
+        plain.strands, zero.strands,
+        "fan_out: 0 must change nothing"
+    );
+    let fan = 0.1;
+    let fanned = grow(&parse(&with(&format!("fan_out: {fan},"))));
+    assert_eq!(plain.strands.len(), fanned.strands.len());
+    let c = parse(&one_wisp(5, wisp, "")).style.head.scalp().center;
+    let (mut turned, mut parallel) = (0usize, 0usize);
+    for (p, f) in plain.strands.iter().zip(&fanned.strands) {
+        assert_eq!(p.points[0], f.points[0], "same roots");
+        let (az, el) = angles(c, f.points[0]);
+        // Horizontal heading of the first segment, degrees from +z towards +x.
+        let heading = |s: &[[f64; 3]]| {
+            let d = sub(s[1], s[0]);
+            d[0].atan2(d[2]).to_degrees()
+        };
+        let off = |a: f64, b: f64| ((a - b + 540.0) % 360.0 - 180.0).abs();
+        // Away from the tile's centre meridian (45°) the fanned strand heads along its own
+        // meridian, the plain one along the centre's.
+        if off(az, 45.0) > 20.0 && el < 85.0 {
+            assert!(
+                off(heading(&f.points), az) < 10.0,
+                "fanned heading at az {az}"
+            );
+            assert!(
+                off(heading(&p.points), 45.0) < 10.0,
+                "plain heading at az {az}"
+            );
+            turned += 1;
+        }
+        // Past `fan` metres of arc the fanned strand is the plain one again.
+        let mut arc = 0.0;
+        for j in 1..p.points.len() {
+            arc += norm(sub(f.points[j], f.points[j - 1]));
+            if arc > fan + 0.02 {
+                assert!(norm(sub(p.points[j], f.points[j])) < 1e-9, "point {j}");
+                parallel += 1;
+            }
+        }
+    }
+    assert!(
+        turned > 10 && parallel > 10,
+        "{turned} turned, {parallel} checked below"
+    );
+    // A negative length is refused, naming the field.
+    let err = style::parse(Path::new("t.ron"), &with("fan_out: -1,")).unwrap_err();
+    assert!(err.to_string().contains("hair.fan_out"), "{err}");
+}
+
 #[test]
 fn a_mirrored_wisp_is_the_exact_mirror_image_of_its_source() {
     let wisp = r#"(name: "left", region: (azimuth: (40, 140), elevation: (-10, 60)), tiles: (2, 2),
@@ -325,7 +387,9 @@ fn the_four_paper_styles() {
         let st = &s.style;
         let hair = grow(&s);
         let n = hair.strands.len();
-        assert!((9_000..=11_000).contains(&n), "{file}: {n} strands");
+        // About 10,000 strands at 20-22 per cm², with 30-60 per cm² on the regions seen from
+        // above (since issue 28, so that the hair hides the scalp there).
+        assert!((11_000..=17_000).contains(&n), "{file}: {n} strands");
         assert!(
             (0.5..=2.0).contains(&st.sim.total_mass),
             "{file}: mass {}",
