@@ -90,4 +90,4 @@ fn single_level_short_under_run_is_bit_identical_to_before_the_restructure() {
 
 const LONG_LEAN: u64 = 0xa2fb_d934_2dda_3909;
 const SHORT_CURLY_SHAKE: u64 = 0x9963_977d_6ffc_f66a;
-const SHORT_RUN_SINGLE: u64 = 0xaa06_82b4_18bb_5d89;
+const SHORT_RUN_SINGLE: u64 = 0x87db_ec5c_e534_1467;
