@@ -420,6 +420,53 @@ fn dense_strands_move_rigidly_with_rigidly_moved_guides() {
     );
 }
 
+/// The dense binding follows guides that come and go (§4.3) by searching again only what
+/// changed: after every insertion, removal and reuse of a slot it is the full search's, bit
+/// for bit (slots, weights), ties between equally distant guides included.
+#[test]
+fn dense_binding_after_guides_come_and_go_is_the_full_search() {
+    use wisptree::solver::guides::dense::Dense;
+    let scene = Scene::load("short", "lean", SolverKind::Guides).unwrap();
+    let model = &scene.model;
+    let k = model.k;
+    let picks = wisptree::solver::guides::pick_guides(model, 60);
+    let mut roots: Vec<(usize, Vector3<f64>)> = picks
+        .iter()
+        .enumerate()
+        .map(|(g, &s)| (g, model.strands.rest[s * k]))
+        .collect();
+    // A guide at the same root as another (a tie in distance, decided by slot).
+    roots.push((60, roots[3].1));
+    let mut inc = Dense::new(model, 3);
+    let mut steps: Vec<Vec<(usize, Vector3<f64>)>> = vec![roots.clone()];
+    let mut r = roots.clone();
+    // Insert halfway guides one by one, remove some, reuse a slot at another root.
+    for (slot, (a, b)) in [(61, (0, 1)), (62, (5, 9)), (63, (20, 21))] {
+        r.push((slot, (r[a].1 + r[b].1) * 0.5));
+        steps.push(r.clone());
+    }
+    r.retain(|e| e.0 != 62);
+    steps.push(r.clone());
+    r.retain(|e| e.0 != 3 && e.0 != 61);
+    steps.push(r.clone());
+    r.push((62, (r[10].1 + r[11].1) * 0.5));
+    steps.push(r.clone());
+    let last = r.len() - 1;
+    r[last].1 = (r[30].1 + r[31].1) * 0.5;
+    steps.push(r.clone());
+    for (i, roots) in steps.iter().enumerate() {
+        inc.bind(model, roots);
+        let mut full = Dense::new(model, 3);
+        full.bind(model, roots);
+        assert_eq!(inc.guide, full.guide, "slots differ after change {i}");
+        let (wi, wf): (Vec<u64>, Vec<u64>) = (
+            inc.weight.iter().map(|w| w.to_bits()).collect(),
+            full.weight.iter().map(|w| w.to_bits()).collect(),
+        );
+        assert_eq!(wi, wf, "weights differ after change {i}");
+    }
+}
+
 /// Every paper style under every motion for 10 s (with fewer guides, to keep the file fast):
 /// at every step the state stays finite and valid, every vertex within its guide's length of
 /// its root, and the kinetic energy bounded (below every vertex moving at 10 m/s). Nothing

@@ -1,6 +1,10 @@
 //! The guide-strand paper's braid and brush experiments (Chang, Jin, Yu 2002, §7.2 Fig. 6 and
 //! §7.4 Fig. 7), shortened, and the moving obstacle they rely on.
 
+#[path = "common/sweep_rrd.rs"]
+#[allow(dead_code)] // the blueprint reader only
+mod sweep_rrd;
+
 use serde_json::Value;
 use wisptree::experiment::{find, ExperimentOptions, ExperimentRun, NoFrames};
 use wisptree::solver::guides::obstacle::{MovingSphere, PathKey};
@@ -189,4 +193,38 @@ fn guide_solver_hands_out_its_obstacle_posed() {
         spheres[0]
     );
     assert!((end - o.center_at(0.0).0).norm() > 0.05, "the sphere moves");
+}
+
+/// The recording's plots that overlay every run (`TimeSeries` views of its blueprint).
+fn overlay_plots(experiment: &str) -> usize {
+    let dir = tempfile::tempdir().unwrap();
+    let rrd = dir.path().join("x.rrd");
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_wisptree"))
+        .args(["experiment", experiment, "--save"])
+        .arg(&rrd)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    // Views by entity (the layout is sent again as runs start: the last send holds them all).
+    let bp = sweep_rrd::cells(&sweep_rrd::read_rrd(&rrd).blueprint);
+    bp.iter()
+        .filter(|((e, c, _), v)| {
+            e.starts_with("/view/")
+                && c.contains("class_identifier")
+                && v.iter()
+                    .any(|a| format!("{a:?}").contains("\"TimeSeries\""))
+        })
+        .count()
+}
+
+#[test]
+fn only_runs_that_count_their_nodes_get_the_overlaid_plots() {
+    // The guides' braid drives its solver itself: no active nodes, no stage times, no plots
+    // (they were flat zeros). The AWT's swing gives them: both plots.
+    assert_eq!(overlay_plots("chang-fig6"), 0);
+    assert_eq!(overlay_plots("awt-fig5"), 2);
 }

@@ -142,6 +142,21 @@ fn the_inspected_accel_radius_crosses_the_threshold_at_the_frame_of_the_split() 
         rrd::scalars(&chunks, &format!("/inspect/{}/active", id.path())).len(),
         FRAMES
     );
+    // The node is ringed in the 3D view every frame: one ellipsoid at its logged position.
+    let ring = rrd::rows(
+        &chunks,
+        "/hair/inspected",
+        rerun::Ellipsoids3D::descriptor_centers().component,
+    );
+    assert_eq!(
+        ring.len(),
+        FRAMES,
+        "the inspected node's ring, frame by frame"
+    );
+    assert!(ring.iter().all(|&(_, n)| n == 1), "{ring:?}");
+    let y = rrd::scalars(&chunks, &format!("/inspect/{}/position_y", id.path()));
+    let h = rrd::scalars(&chunks, &format!("/inspect/{}/height", id.path()));
+    assert_eq!(y, h, "position_y is the height");
 }
 
 #[test]
@@ -174,9 +189,15 @@ fn bad_inspect_requests_exit_2_naming_the_node() {
     let (code, err) = run(&["--inspect", "one:0:0"]);
     assert_eq!(code, Some(2), "{err}");
     assert!(err.contains("TREE"), "{err}");
-    let (code, err) = run(&["--inspect", "0:0:0", "--model", "layered"]);
+    let (code, err) = run(&["--inspect", "0:0:0", "--model", "guides"]);
     assert_eq!(code, Some(2), "{err}");
     assert!(err.contains("no node inspector"), "{err}");
+    let (code, err) = run(&["--inspect", "0:1:0", "--model", "layered"]);
+    assert_eq!(code, Some(2), "{err}");
+    assert!(err.contains("one level of wisps"), "{err}");
+    let (code, err) = run(&["--inspect", "100000:0:0", "--model", "layered"]);
+    assert_eq!(code, Some(2), "{err}");
+    assert!(err.contains("wisp 100000 does not exist"), "{err}");
 }
 
 #[test]
@@ -194,4 +215,142 @@ fn node_ids_parse_and_name_their_path() {
     for bad in ["", "1:2", "1:2:3:4", "-1:0:0", "a:b:c", "1.5:0:0"] {
         assert!(NodeId::parse(bad).is_err(), "{bad}");
     }
+}
+
+#[test]
+fn a_node_clicked_in_the_view_is_the_one_drawn_there() {
+    let scene = Scene::load(STYLE, MOTION, SolverKind::Awt).unwrap();
+    let mut s = scene.solver();
+    let mut r = s.new_report();
+    for _ in 0..12 * s.steps_per_frame() {
+        s.step(&mut r);
+    }
+    let mut frame = wisptree::frame::Frame::default();
+    s.draw(&mut frame);
+    let nodes = &frame.nodes;
+    assert!(
+        nodes.positions.len() > 20,
+        "{} nodes drawn",
+        nodes.positions.len()
+    );
+    let mut v = Vec::new();
+    for c in (0..nodes.positions.len()).step_by(7) {
+        // By instance: the node drawn as instance c, whose inspected position is c's centre.
+        let id = s
+            .pick_node(Some(c), None)
+            .expect("a drawn instance names a node");
+        assert_eq!(id.level, nodes.levels[c] as usize, "instance {c}");
+        s.inspect(&id, &mut v).unwrap();
+        assert_eq!(get(&v, "active"), 1.0, "{id:?}: a drawn node is active");
+        let p = nodes.positions[c].map(|x| x as f64);
+        for (k, axis) in ["position_x", "position_y", "position_z"]
+            .iter()
+            .enumerate()
+        {
+            assert!((get(&v, axis) - p[k]).abs() < 1e-5, "{id:?} {axis}");
+        }
+        // By the point clicked on its sphere (the top of it): a node whose sphere passes
+        // through that point.
+        let r = nodes.radii[c] as f64;
+        let click = [p[0], p[1] + r, p[2]];
+        let hit = s.pick_node(None, Some(click)).unwrap();
+        s.inspect(&hit, &mut v).unwrap();
+        let centre = [
+            get(&v, "position_x"),
+            get(&v, "position_y"),
+            get(&v, "position_z"),
+        ];
+        let d = (0..3)
+            .map(|k| (centre[k] - click[k]).powi(2))
+            .sum::<f64>()
+            .sqrt();
+        assert!(
+            (d - get(&v, "radius")).abs() < 1e-4,
+            "clicked {click:?} on {c}: picked {hit:?} whose surface is {} m away",
+            (d - get(&v, "radius")).abs()
+        );
+    }
+    assert_eq!(s.pick_node(Some(nodes.positions.len()), None), None);
+    // A model without an inspector picks nothing.
+    let guides = Scene::load(STYLE, MOTION, SolverKind::Guides)
+        .unwrap()
+        .solver();
+    assert_eq!(guides.pick_node(Some(0), Some([0.0, 1.6, 0.0])), None);
+}
+
+#[test]
+fn every_node_name_resolves_back_to_its_node() {
+    let scene = Scene::load("long", "lean", SolverKind::Awt).unwrap();
+    let m = &scene.model;
+    for l in 0..m.level_count() {
+        for j in 0..m.levels[l].gc_count() * m.k {
+            let id = NodeId::of(m, l, j);
+            let (g, i) = wisptree::solver::awt::inspect::resolve(m, &id).unwrap();
+            assert_eq!(g * m.k + i, j, "{id:?}");
+        }
+    }
+}
+
+#[test]
+fn a_layered_wisp_point_shows_its_state_and_its_wisps_contacts() {
+    let scene = Scene::load(STYLE, MOTION, SolverKind::Layered).unwrap();
+    let mut s = scene.solver();
+    let mut r = s.new_report();
+    let mut v = Vec::new();
+    let mut seen_contacts = false;
+    for _ in 0..30 {
+        for _ in 0..s.steps_per_frame() {
+            s.step(&mut r);
+        }
+        let mut frame = wisptree::frame::Frame::default();
+        s.sync_display();
+        s.draw(&mut frame);
+        let nodes = &frame.nodes;
+        for c in (0..nodes.positions.len()).step_by(13) {
+            // The point drawn as instance c, and clicked on its centre: the same point.
+            let id = s.pick_node(Some(c), None).unwrap();
+            let p = nodes.positions[c].map(|x| x as f64);
+            s.inspect(&id, &mut v).unwrap();
+            assert_eq!(get(&v, "wisp"), id.tree as f64);
+            assert_eq!(get(&v, "point"), id.index as f64);
+            for (k, axis) in ["position_x", "position_y", "position_z"]
+                .iter()
+                .enumerate()
+            {
+                assert!((get(&v, axis) - p[k]).abs() < 1e-5, "{id:?} {axis}");
+            }
+            assert!((get(&v, "radius") - nodes.radii[c] as f64).abs() < 1e-6);
+            let exact = [
+                get(&v, "position_x"),
+                get(&v, "position_y"),
+                get(&v, "position_z"),
+            ];
+            assert_eq!(s.pick_node(None, Some(exact)), Some(id));
+            // The point's own contacts are among its wisp's, and a wisp with contact points
+            // has contact pairs.
+            let (own, all, pairs) = (
+                get(&v, "point_contacts"),
+                get(&v, "wisp_contacts"),
+                get(&v, "wisp_contact_pairs"),
+            );
+            assert!(own <= all, "{v:?}");
+            assert_eq!(all > 0.0, pairs > 0.0, "{v:?}");
+            seen_contacts |= pairs > 0.0;
+        }
+    }
+    assert!(
+        seen_contacts,
+        "no wisp inspected touched another in 30 frames of {MOTION}"
+    );
+    let e = s
+        .inspect(
+            &NodeId {
+                tree: 0,
+                level: 0,
+                index: 100_000,
+            },
+            &mut v,
+        )
+        .unwrap_err();
+    assert!(e.contains("point 100000 does not exist"), "{e}");
 }

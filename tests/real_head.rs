@@ -84,7 +84,13 @@ fn deepest(style: &Path, kind: SolverKind, seconds: f64) -> f64 {
         kind,
     )
     .unwrap();
-    let collider = with.model.colliders.clone();
+    // Measured against the exact surface (the triangle tree), whatever query the solvers use.
+    let collider: Vec<_> = with
+        .model
+        .colliders
+        .iter()
+        .map(|c| c.with_mesh_query(wisptree::model::body::MeshQuery::Tree))
+        .collect();
     let scene =
         Scene::load(style.to_str().unwrap(), "still", kind).unwrap_or_else(|e| panic!("{e:#}"));
     let mut s = scene.solver();

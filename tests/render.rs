@@ -604,3 +604,221 @@ fn no_strands_draws_the_body_on_the_background() {
         );
     }
 }
+
+/// An icosphere of radius `r` centred at the origin, subdivided `levels` times.
+fn icosphere(r: f64, levels: usize) -> wisptree::style::obj::TriangleMesh {
+    let t = (1.0 + 5f64.sqrt()) / 2.0;
+    let unit = |p: [f64; 3]| {
+        let n = (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt();
+        [p[0] / n, p[1] / n, p[2] / n]
+    };
+    let mut v: Vec<[f64; 3]> = [
+        [-1., t, 0.],
+        [1., t, 0.],
+        [-1., -t, 0.],
+        [1., -t, 0.],
+        [0., -1., t],
+        [0., 1., t],
+        [0., -1., -t],
+        [0., 1., -t],
+        [t, 0., -1.],
+        [t, 0., 1.],
+        [-t, 0., -1.],
+        [-t, 0., 1.],
+    ]
+    .map(unit)
+    .to_vec();
+    let mut f: Vec<[u32; 3]> = vec![
+        [0, 11, 5],
+        [0, 5, 1],
+        [0, 1, 7],
+        [0, 7, 10],
+        [0, 10, 11],
+        [1, 5, 9],
+        [5, 11, 4],
+        [11, 10, 2],
+        [10, 7, 6],
+        [7, 1, 8],
+        [3, 9, 4],
+        [3, 4, 2],
+        [3, 2, 6],
+        [3, 6, 8],
+        [3, 8, 9],
+        [4, 9, 5],
+        [2, 4, 11],
+        [6, 2, 10],
+        [8, 6, 7],
+        [9, 8, 1],
+    ];
+    for _ in 0..levels {
+        let mut mid = std::collections::HashMap::new();
+        let mut nf = Vec::new();
+        for tri in &f {
+            let mut m = [0u32; 3];
+            for k in 0..3 {
+                let (a, b) = (tri[k], tri[(k + 1) % 3]);
+                m[k] = *mid.entry((a.min(b), a.max(b))).or_insert_with(|| {
+                    let (p, q) = (v[a as usize], v[b as usize]);
+                    v.push(unit([p[0] + q[0], p[1] + q[1], p[2] + q[2]]));
+                    (v.len() - 1) as u32
+                });
+            }
+            nf.extend([
+                [tri[0], m[0], m[2]],
+                [tri[1], m[1], m[0]],
+                [tri[2], m[2], m[1]],
+                m,
+            ]);
+        }
+        f = nf;
+    }
+    wisptree::style::obj::TriangleMesh {
+        vertices: v.iter().map(|p| p.map(|c| c * r)).collect(),
+        triangles: f,
+        boundary_edges: 0,
+    }
+}
+
+/// Mean absolute difference of two images' pixels within `radius` pixels of (cx, cy), in
+/// 8-bit levels.
+fn mean_diff_in_disk(a: &Image, b: &Image, (cx, cy): (u32, u32), radius: f32) -> f64 {
+    let (mut sum, mut n) = (0.0, 0usize);
+    for y in 0..H {
+        for x in 0..W {
+            let (dx, dy) = (x as f32 - cx as f32, y as f32 - cy as f32);
+            if dx * dx + dy * dy <= radius * radius {
+                let (p, q) = (a.pixel(x, y), b.pixel(x, y));
+                sum += p
+                    .iter()
+                    .zip(q)
+                    .map(|(u, v)| (*u as f64 - v as f64).abs())
+                    .sum::<f64>()
+                    / 3.0;
+                n += 1;
+            }
+        }
+    }
+    sum / n as f64
+}
+
+#[test]
+fn a_mesh_body_is_drawn_shaded_and_receives_the_hair_shadow() {
+    // A sphere of radius 0.1 given as a triangle mesh (1280 triangles), placed by the pose (a
+    // turn about y and a shift along x), against the analytic sphere where the pose puts it:
+    // the same picture but for the facets' silhouette, which the test's tolerances allow.
+    let shift = 0.02f32;
+    let (s, c) = (0.3f32.sin(), 0.3f32.cos());
+    let mesh_body = BodyBuf {
+        meshes: vec![std::sync::Arc::new(icosphere(0.1, 3))],
+        pose_translation: [shift, 0.0, 0.0],
+        pose_rotation: [0.0, s, 0.0, c],
+        scalp_radii: [0.0; 3],
+        scalp_rotation: [0.0, 0.0, 0.0, 1.0],
+        ..Default::default()
+    };
+    let sphere_body = BodyBuf {
+        sphere_centers: vec![[shift, 0.0, 0.0]],
+        sphere_radii: vec![0.1],
+        scalp_radii: [0.0; 3],
+        scalp_rotation: [0.0, 0.0, 0.0, 1.0],
+        ..Default::default()
+    };
+    let no_body = BodyBuf {
+        scalp_radii: [0.0; 3],
+        scalp_rotation: [0.0, 0.0, 0.0, 1.0],
+        ..Default::default()
+    };
+    // A dense wisp above the left half of the body, lit from above; a strand behind it.
+    let mut lines = Vec::new();
+    for k in 0..40 {
+        let x = shift - 0.12 + k as f32 * 0.003;
+        for m in 0..3 {
+            lines.push(line([x, 0.2 + 0.004 * m as f32, -0.15], [x, 0.2, 0.15], 10));
+        }
+    }
+    lines.push(line([-0.2, 0.0, -0.3], [0.2, 0.0, -0.3], 20));
+    let hair = strands(&lines);
+    let params = RenderParams {
+        light_dir: [0.0, 1.0, 0.0],
+        kappa: 0.3,
+        ..RenderParams::default()
+    };
+    let cam = front_camera();
+    let img = render(params.clone(), &hair, &mesh_body, &cam);
+    let sphere = render(params.clone(), &hair, &sphere_body, &cam);
+    let bare = render(params.clone(), &hair, &no_body, &cam);
+
+    // Where the sphere is, the mesh is drawn: body colour, not the background and the strand
+    // behind.
+    let centre = pixel_of([shift, 0.0, 0.1]);
+    let disk = 0.1 / pixel_size() * 0.9;
+    let vs_sphere = mean_diff_in_disk(&img, &sphere, centre, disk);
+    let vs_bare = mean_diff_in_disk(&img, &bare, centre, disk);
+    assert!(
+        vs_sphere < 2.0 && vs_bare > 20.0,
+        "mean difference over the body's disk: {vs_sphere:.2} levels from the sphere, \
+         {vs_bare:.2} from no body"
+    );
+    let body_colour = params.body_color.map(srgb_to_linear);
+    let p = img
+        .pixel(centre.0, centre.1)
+        .map(|c| srgb_to_linear(c as f32 / 255.0));
+    // Lit from above, the centre facing the camera gets the ambient term only: a darker
+    // version of the body colour (in linear light), the same hue.
+    let ratio = [
+        p[0] / body_colour[0],
+        p[1] / body_colour[1],
+        p[2] / body_colour[2],
+    ];
+    assert!(
+        ratio.iter().all(|r| (r - ratio[0]).abs() < 0.25 * ratio[0]),
+        "centre {p:?} against body colour {body_colour:?}"
+    );
+
+    // The hair's shadow: darker under the wisp than in the open, as on the sphere.
+    let y = 0.06;
+    let z = (0.01f32 - y * y - 0.03 * 0.03).sqrt();
+    let under = pixel_of([shift - 0.03, y, z]);
+    let open = pixel_of([shift + 0.03, y, z]);
+    let (a, b) = (
+        luminance(img.pixel(under.0, under.1)),
+        luminance(img.pixel(open.0, open.1)),
+    );
+    assert!(a < 0.85 * b, "under the hair {a}, in the open {b}");
+    let (sa, sb) = (
+        luminance(sphere.pixel(under.0, under.1)),
+        luminance(sphere.pixel(open.0, open.1)),
+    );
+    assert!(
+        (a - sa).abs() < 0.05 * sa && (b - sb).abs() < 0.05 * sb,
+        "mesh {a}, {b}; sphere {sa}, {sb}"
+    );
+
+    // Hair lying on the skin shows though it dips a millimetre under it (the renderer's
+    // slack for chords of a curved surface); hair a centimetre under the skin does not.
+    for (depth, shows) in [(0.001f32, true), (0.01, false)] {
+        let z = 0.1 - depth;
+        let mut l = lines.clone();
+        for k in 0..5 {
+            let y = -0.01 - 0.002 * k as f32;
+            l.push(line([shift - 0.008, y, z], [shift + 0.008, y, z], 4));
+        }
+        let with = render(params.clone(), &strands(&l), &mesh_body, &cam);
+        let at = pixel_of([shift, -0.014, z]);
+        let changed = with.pixel(at.0, at.1) != img.pixel(at.0, at.1);
+        assert_eq!(changed, shows, "hair {depth} m under the skin");
+    }
+
+    // One and two threads give the same image.
+    let mut r2 = Renderer::new(params, W, H, 2).expect("valid renderer");
+    let mut two = Image::default();
+    r2.render(
+        &RenderInput {
+            strands: &hair,
+            body: &mesh_body,
+        },
+        &cam,
+        &mut two,
+    );
+    assert_eq!(two.rgb, img.rgb);
+}

@@ -47,7 +47,7 @@ fn the_control_endpoint_takes_only_the_pages_requests_from_its_own_origin() {
     let page = http(port, "GET", "/", &[], "");
     assert_eq!(page.status, 200);
     assert!(
-        page.body.contains("id=\"params\"") && page.body.contains("<iframe"),
+        page.body.contains("id=\"params\"") && page.body.contains("/viewer/re_viewer.js"),
         "{}",
         page.body
     );
@@ -220,4 +220,134 @@ fn each_model_brings_its_own_tunables_to_the_page() {
     run.wait_state("link stiffness applied", |s| {
         s["params"]["link_strength"].as_f64() == Some(900.0)
     });
+}
+
+#[test]
+fn the_inspector_shows_a_nodes_split_and_merge_tests_every_frame() {
+    let run = WebRun::start(&[]);
+    run.wait_state("first published state", |s| s["version"].as_u64() > Some(0));
+    assert!(
+        run.state()["inspect"].is_null(),
+        "no node is inspected at the start"
+    );
+    let r = run.control(r#"{"type":"inspect","node":"0:1:2"}"#);
+    assert_eq!(r.status, 200, "{}", r.body);
+    let s = run.wait_state("the inspected node's numbers", |s| {
+        s["inspect"]["node"] == "0:1:2"
+    });
+    let values = |s: &serde_json::Value| -> Vec<(String, f64)> {
+        s["inspect"]["values"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|p| (p[0].as_str().unwrap().to_owned(), p[1].as_f64().unwrap()))
+            .collect()
+    };
+    let v = values(&s);
+    let names: Vec<&str> = v.iter().map(|(n, _)| n.as_str()).collect();
+    for n in [
+        "accel_radius",
+        "split_threshold_in_force",
+        "may_split",
+        "merge_relative_velocity",
+        "merge_velocity_in_force",
+        "last_change_s",
+        "position_x",
+        "velocity_z",
+        "acceleration_y",
+        "radius",
+        "mass",
+    ] {
+        assert!(names.contains(&n), "{n} missing from {names:?}");
+    }
+    let get = |v: &[(String, f64)], n: &str| v.iter().find(|(k, _)| k == n).unwrap().1;
+    // The threshold shown is the one in force: set it, and the inspector follows.
+    assert_eq!(
+        get(&v, "split_threshold_in_force"),
+        s["params"]["split_threshold"].as_f64().unwrap()
+    );
+    let r = run.control(r#"{"type":"set","param":"split_threshold","value":0.33}"#);
+    assert_eq!(r.status, 200, "{}", r.body);
+    let s = run.wait_state("the new threshold in the inspector", |s| {
+        s["inspect"]["values"].as_array().is_some_and(|a| {
+            a.iter()
+                .any(|p| p[0] == "split_threshold_in_force" && p[1] == 0.33)
+        })
+    });
+    // Updated every frame: the time of the numbers moves on.
+    let t0 = s["inspect"]["sim_time"].as_f64().unwrap();
+    run.wait_state("later numbers", |s| {
+        s["inspect"]["sim_time"].as_f64().is_some_and(|t| t > t0)
+    });
+
+    // A node the model does not have: refused in the log, the inspected node stays.
+    let r = run.control(r#"{"type":"inspect","node":"0:9:0"}"#);
+    assert_eq!(r.status, 200, "{}", r.body);
+    let s = run.wait_state("the refusal in the log", |s| {
+        s["log"].as_array().unwrap().iter().any(|l| {
+            l["text"]
+                .as_str()
+                .unwrap()
+                .contains("level 9 does not exist")
+        })
+    });
+    assert_eq!(s["inspect"]["node"], "0:1:2");
+    // Malformed: refused at once with 400, naming the form.
+    for body in [
+        r#"{"type":"inspect","node":"0:1"}"#,
+        r#"{"type":"inspect","node":"a:b:c"}"#,
+        r#"{"type":"inspect"}"#,
+        r#"{"type":"inspect","node":"0:1:2","extra":1}"#,
+    ] {
+        let r = run.control(body);
+        assert_eq!(r.status, 400, "{body}: {}", r.body);
+    }
+    let r = run.control(r#"{"type":"inspect","node":"0:1"}"#);
+    assert!(r.body.contains("TREE:LEVEL:INDEX"), "{}", r.body);
+    // Clear: no node.
+    let r = run.control(r#"{"type":"inspect","node":""}"#);
+    assert_eq!(r.status, 200, "{}", r.body);
+    run.wait_state("no node inspected", |s| s["inspect"].is_null());
+}
+
+#[test]
+fn the_page_hosts_the_viewer_and_inspects_the_node_clicked_in_it() {
+    let run = WebRun::start(&[]);
+    // The viewer's script and wasm come from the page's own server (same origin).
+    let js = http(run.port, "GET", "/viewer/re_viewer.js", &[], "");
+    assert_eq!(js.status, 200);
+    assert!(js.body.contains("WebHandle"), "not the viewer's script");
+    let wasm = http(run.port, "GET", "/viewer/re_viewer_bg.wasm", &[], "");
+    assert_eq!(wasm.status, 200);
+    assert!(wasm.body.starts_with("\0asm"), "not WebAssembly");
+    assert!(
+        wasm.head
+            .to_ascii_lowercase()
+            .contains("content-type: application/wasm"),
+        "{}",
+        wasm.head
+    );
+    run.wait_state("first published state", |s| s["version"].as_u64() > Some(0));
+    // What the page sends when the viewer reports a click on an instance of the nodes.
+    let r = run.control(r#"{"type":"pick","instance":0,"position":null}"#);
+    assert_eq!(r.status, 200, "{}", r.body);
+    let s = run.wait_state("the clicked node inspected", |s| {
+        s["inspect"]["node"].is_string()
+    });
+    assert!(
+        s["log"].as_array().unwrap().iter().any(|l| l["text"]
+            .as_str()
+            .unwrap()
+            .contains("(clicked in the view)")),
+        "{s}"
+    );
+    for body in [
+        r#"{"type":"pick","instance":null,"position":null}"#,
+        r#"{"type":"pick","instance":1000000000000}"#,
+        r#"{"type":"pick","position":[0,1e300,0]}"#,
+        r#"{"type":"pick","position":[0,1]}"#,
+    ] {
+        let r = run.control(body);
+        assert_eq!(r.status, 400, "{body}: {}", r.body);
+    }
 }

@@ -2,7 +2,7 @@
 //! (`chromedriver`, Debian's `chromium-driver`; `.ci/run` installs both). It moves the split
 //! threshold slider with the pointer and checks that the simulation takes the value, that an
 //! out-of-range value typed in is refused on the page, that a second tab shows the change, and
-//! it takes a screenshot of the page at 1280×800 (`target/web_page.png`). With
+//! it takes a screenshot of the page at 1280×800 (`target/tmp/web_page.png`). With
 //! `WISPTREE_DOCS_SHOT=1` it also writes README's `docs/web.png`, the page with the viewer.
 
 mod web_common;
@@ -259,13 +259,58 @@ fn the_page_moves_the_simulation_refuses_bad_values_and_keeps_tabs_in_agreement(
         t.parse::<f64>().is_ok_and(|v| (v - merge).abs() < 1e-3)
     });
 
+    // The inspector: typed in, then as the viewer reports a click on a node (the page's
+    // handler of the viewer's selection events, called as the viewer calls it).
+    for (field, value) in [("#i-tree", "0"), ("#i-level", "0"), ("#i-index", "1")] {
+        let e = d.element(field);
+        d.call(
+            "POST",
+            &format!("/element/{e}/value"),
+            Some(json!({"text": format!("\u{E009}a\u{E000}{value}")})),
+        );
+    }
+    d.click("#inspect");
+    let shown = d.wait_text("#inspect-out", "the inspected node's numbers", |t| {
+        t.contains("0:0:1") && t.contains("a·r")
+    });
+    assert!(shown.contains("against threshold"), "{shown}");
+    d.script(
+        "onViewerEvent({type: 'selection_change', items: [{type: 'entity', \
+         entity_path: '/hair/awt/nodes', instance_id: 2}]}); return 0",
+        json!([]),
+    );
+    let s = run.wait_state("the clicked node inspected", |s| {
+        s["log"].as_array().unwrap().iter().any(|l| {
+            l["text"]
+                .as_str()
+                .unwrap()
+                .contains("(clicked in the view)")
+        })
+    });
+    let line = s["log"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|l| l["text"].as_str().unwrap())
+        .find(|t| t.contains("(clicked in the view)"))
+        .unwrap()
+        .to_owned();
+    let picked = line
+        .split_whitespace()
+        .nth(2)
+        .expect("inspecting node T:L:I (clicked in the view)")
+        .to_owned();
+    d.wait_text("#inspect-out", "the page shows the clicked node", |t| {
+        t.contains(&picked)
+    });
+
     // A screenshot at 1280×800, after the viewer had a moment to load.
     std::thread::sleep(Duration::from_secs(8));
     let png = d.call("GET", "/screenshot", None);
     let bytes = base64::engine::general_purpose::STANDARD
         .decode(png.as_str().unwrap())
         .unwrap();
-    let target = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("target/web_page.png");
+    let target = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("web_page.png");
     std::fs::write(&target, &bytes).unwrap();
     let img = image::load_from_memory(&bytes).unwrap().to_rgb8();
     assert_eq!((img.width(), img.height()), (1280, 800));
@@ -292,15 +337,13 @@ fn the_page_moves_the_simulation_refuses_bad_values_and_keeps_tabs_in_agreement(
 /// README's picture: the page with the viewer, the run paused so that the viewer (rendering in
 /// software here) settles, its frame in a process of its own.
 fn docs_shot(run: &mut WebRun) {
-    let line = run.wait_line("Rerun web viewer on port", Duration::from_secs(1));
-    let viewer_port: u16 = line
-        .split("viewer on port ")
-        .nth(1)
-        .and_then(|r| r.split(',').next())
-        .and_then(|p| p.trim().parse().ok())
-        .expect("the viewer's port");
+    // A node inspected, so that the picture shows the inspector too; paused, so that the
+    // viewer (rendering in software here) has the machine to itself.
+    let r = run.control(r#"{"type":"inspect","node":"0:0:1"}"#);
+    assert_eq!(r.status, 200, "{}", r.body);
+    run.wait_state("the node inspected", |s| s["inspect"]["node"] == "0:0:1");
     assert_eq!(run.control(r#"{"type":"pause","paused":true}"#).status, 200);
-    let d = Driver::start_with(&[format!("--isolate-origins=http://127.0.0.1:{viewer_port}")]);
+    let d = Driver::start();
     d.call("POST", "/url", Some(json!({"url": run.url()})));
     std::thread::sleep(Duration::from_secs(60));
     let png = d.call("GET", "/screenshot", None);

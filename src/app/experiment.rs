@@ -46,6 +46,10 @@ struct RecordingSink {
     rendered: Vec<String>,
     /// The labels of the runs whose 3D view follows the head.
     followed: Vec<String>,
+    /// Labels of the runs whose frames carry a step's counters (active nodes, stage times):
+    /// only those are plotted (a guide or layered experiment that drives its solver itself
+    /// has none, and its plots were flat zeros).
+    counted: Vec<String>,
     /// The runs of a rendering experiment (no solver), in order.
     render_runs: Vec<RunView>,
 }
@@ -54,6 +58,7 @@ impl RecordingSink {
     /// The layout's view of solver run `l`.
     fn view(&self, l: &RunLog) -> RunView {
         let mut v = l.view(self.rendered.contains(&l.label));
+        v.stats = self.counted.contains(&l.label);
         if self.followed.contains(&l.label) {
             v.track = Some(format!("/runs/{}{}", l.label, crate::stream::paths::SCALP));
         }
@@ -85,7 +90,11 @@ impl RecordingSink {
     ) -> anyhow::Result<()> {
         let new_render = extras.image.is_some() && !self.rendered.iter().any(|l| l == label);
         let new_follow = extras.follow_head && !self.followed.iter().any(|l| l == label);
-        if new_render || new_follow {
+        let new_counted = extras.counters.is_some() && !self.counted.iter().any(|l| l == label);
+        if new_counted {
+            self.counted.push(label.to_owned());
+        }
+        if new_render || new_follow || (new_counted && self.runs.iter().any(|r| r.label == label)) {
             if new_render {
                 self.rendered.push(label.to_owned());
             }
@@ -311,6 +320,7 @@ pub fn run(cmd: &ExperimentCommand) -> anyhow::Result<()> {
                     runs: Vec::new(),
                     rendered: Vec::new(),
                     followed: Vec::new(),
+                    counted: Vec::new(),
                     render_runs: Vec::new(),
                 }),
                 pictures,

@@ -117,14 +117,21 @@ pub fn run_with(opts: RunOptions, stop: StopSignal) -> anyhow::Result<RunSummary
     // Load first: a bad style must not leave an empty recording or a spawned viewer behind.
     let scene = Scene::load(&opts.style, &opts.motion, opts.model)?;
     if let Some(node) = &opts.inspect {
-        if !matches!(opts.model, SolverKind::Awt | SolverKind::SingleLevel) {
-            return Err(BadInput(format!(
-                "--inspect: the {} model has no node inspector yet (the AWT has)",
-                opts.model.name()
-            ))
-            .into());
-        }
-        crate::solver::awt::inspect::resolve(&scene.model, node)
+        let checked = match opts.model {
+            SolverKind::Awt | SolverKind::SingleLevel => {
+                crate::solver::awt::inspect::resolve(&scene.model, node).map(|_| ())
+            }
+            SolverKind::Layered => crate::solver::layered::inspect::resolve(
+                &scene.model,
+                &scene.loaded.style.layered,
+                node,
+            ),
+            other => Err(format!(
+                "the {} model has no node inspector yet (the AWT and layered have)",
+                other.name()
+            )),
+        };
+        checked
             .map_err(|e| BadInput(format!("--inspect {}: {e}", node.path().replace('/', ":"))))?;
     }
     let console = Console::default();

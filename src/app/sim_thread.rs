@@ -15,6 +15,7 @@ use crate::report::tempo::{RealtimeMeter, Tempo, SLOW_BELOW};
 use crate::scene::Scene;
 use crate::solver::tunable::{self, Tuning};
 use crate::solver::Solver;
+use crate::web::protocol::InspectedNode;
 use crate::web::{Controls, SetTunable, SharedState};
 
 /// Poll period while paused.
@@ -36,6 +37,10 @@ pub enum Control {
     /// Restart on another scene (motion or model chosen on the page) with the parameters in
     /// force.
     Switch(Box<Scene>, String),
+    /// Inspect this node from the next frame on, or none (the control page's inspector).
+    Inspect(Option<crate::solver::NodeId>),
+    /// Inspect the node clicked in the page's viewer.
+    Pick(crate::web::protocol::NodePick),
 }
 
 /// What the simulation thread did.
@@ -190,6 +195,7 @@ impl SimThread {
             };
             frame.messages.append(&mut st.messages);
             make_frame(&mut st, &mut report, &mut frame, index);
+            self.publish_inspected(&st, &frame);
             index += 1;
             st.out.frames = index;
             if self.live {
@@ -280,6 +286,47 @@ impl SimThread {
                     st.said_slow = false;
                     st.meter.restart_clock();
                 }
+                Control::Pick(pick) => {
+                    let node = st.solver.pick_node(pick.instance, pick.position);
+                    match node {
+                        Some(n) => {
+                            let name = n.path().replace('/', ":");
+                            st.inspect = Some(n);
+                            say(format!("inspecting node {name} (clicked in the view)"), st);
+                        }
+                        None => say(
+                            format!(
+                                "inspect: no node of the {} model there",
+                                st.solver.kind().name()
+                            ),
+                            st,
+                        ),
+                    }
+                }
+                Control::Inspect(node) => {
+                    // A node the model does not have keeps the one inspected before.
+                    let checked = match node {
+                        None => Ok("inspector: no node selected".to_owned()),
+                        Some(n) => {
+                            let name = n.path().replace('/', ":");
+                            st.solver
+                                .inspect(&n, &mut Vec::new())
+                                .map(|()| format!("inspecting node {name}"))
+                                .map_err(|e| format!("inspect {name}: {e}"))
+                        }
+                    };
+                    let msg = match checked {
+                        Ok(msg) => {
+                            st.inspect = node;
+                            if let (None, Some(s)) = (node, &self.shared) {
+                                s.inspect(None);
+                            }
+                            msg
+                        }
+                        Err(msg) => msg,
+                    };
+                    say(msg, st);
+                }
                 Control::Key(KeyAction::TogglePause) => {
                     st.paused = !st.paused;
                     say(
@@ -352,6 +399,18 @@ impl SimThread {
     }
 
     /// Tells the control pages what is in force.
+    /// The inspected node's numbers of this frame, for the control pages' inspector.
+    fn publish_inspected(&self, st: &LoopState, frame: &Frame) {
+        let (Some(shared), Some(_)) = (&self.shared, &st.inspect) else {
+            return;
+        };
+        shared.inspect(frame.inspect.as_ref().map(|(path, values)| InspectedNode {
+            node: path.replace('/', ":"),
+            sim_time: frame.sim_time,
+            values: values.clone(),
+        }));
+    }
+
     fn publish(&self, st: &LoopState) {
         let Some(shared) = &self.shared else { return };
         let tuning = st.solver.tuning();
@@ -403,6 +462,9 @@ fn make_frame(
         if st.solver.inspect(node, values).is_err() {
             f.inspect = None;
         }
+    } else {
+        // (Frames are reused: one inspected before must not keep its numbers.)
+        f.inspect = None;
     }
     st.out.splits += f.splits as u64;
     st.out.merges += f.merges as u64;

@@ -397,6 +397,8 @@ fn web_command(
         // The page server sends tunable values to the simulation thread itself.
         WebCommand::Set(..) => return,
         WebCommand::Pause(paused) => Control::Pause(paused),
+        WebCommand::Inspect(node) => Control::Inspect(node),
+        WebCommand::Pick(pick) => Control::Pick(pick),
         WebCommand::Restart => Control::Key(KeyAction::Restart),
         WebCommand::Motion(spec) => match current.with_motion(&spec) {
             Ok(s) => {

@@ -6,8 +6,9 @@ use std::path::{Path, PathBuf};
 
 use serde_json::{json, Map};
 
-use super::{ExperimentDef, ExperimentOptions, ExperimentRun, FrameSink};
+use super::{ExperimentDef, ExperimentOptions, ExperimentRun, FrameExtras, FrameSink};
 use crate::model::HairModel;
+use crate::report::{Counters, StageTimes};
 use crate::scene::Scene;
 use crate::solver::{EventKind, SolverKind};
 use crate::style::builtin::StyleSource;
@@ -46,10 +47,15 @@ fn run_fig5(
     let mut splits: Vec<u16> = Vec::new();
     let mut merged = false;
     let mut events = Vec::new();
+    // The frame's counters for the recording's plots: the last step's, with the stage times
+    // of all the frame's steps (as `run` reports them).
+    let mut counters = Counters::default();
     for _ in 0..frames {
         events.clear();
+        let mut times = StageTimes::default();
         for _ in 0..s.steps_per_frame() {
             s.step(&mut report);
+            times.add(&report.counters.times);
             for e in &report.events {
                 if e.level != 0 {
                     continue;
@@ -64,7 +70,13 @@ fn run_fig5(
             }
             events.extend_from_slice(&report.events);
         }
-        sink.frame("swing", s.as_mut(), &events)?;
+        counters.clone_from(&report.counters);
+        counters.times = times;
+        let extras = FrameExtras {
+            counters: Some(&counters),
+            ..FrameExtras::default()
+        };
+        sink.frame_with("swing", s.as_mut(), &events, extras)?;
     }
     let mut m = Map::new();
     m.insert("split_cross_sections".into(), json!(splits));

@@ -12,6 +12,7 @@ use nalgebra::Vector3;
 use crate::style::{Link, LoadedStyle, RawHair, Sphere, StyleError};
 
 pub mod body;
+pub mod body_sdf;
 mod check;
 
 use check::check_strands;

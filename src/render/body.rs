@@ -15,7 +15,8 @@ pub(crate) struct Prim {
     pub rect: [f32; 4],
 }
 
-fn rotate(q: [f32; 4], v: [f32; 3]) -> [f32; 3] {
+/// `v` turned by the unit quaternion `q` (x, y, z, w).
+pub(crate) fn rotate(q: [f32; 4], v: [f32; 3]) -> [f32; 3] {
     // v' = v + 2w(u × v) + 2u × (u × v), with q = (u, w).
     let u = [q[0], q[1], q[2]];
     let t = scale(super::camera::cross(u, v), 2.0);
@@ -123,7 +124,8 @@ pub(crate) fn prims(body: &BodyBuf, view: &View, w: f32, h: f32, out: &mut Vec<P
     }
     // A capsule is drawn as the spheres along its axis, 0.08 radius apart: the normals at
     // the ridges between them turn by 2.3° (a quarter radius showed rings in the shading),
-    // and the spheres' shading and shadows serve as they are. (Meshes are not drawn yet.)
+    // and the spheres' shading and shadows serve as they are. (Meshes are rasterised
+    // instead: [`super::mesh`].)
     for ([a, b], r) in body.capsule_ends.iter().zip(&body.capsule_radii) {
         if *r <= 0.0 {
             continue;

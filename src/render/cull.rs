@@ -19,7 +19,7 @@ pub(crate) struct BodyLayer {
     pub oy: i32,
     pub body_seen: bool,
     pub zb: Vec<f32>,
-    pub prim: Vec<u16>,
+    pub prim: Vec<u32>,
     pub block_close: Vec<f32>,
 }
 

@@ -5,11 +5,12 @@
 //!
 //! 1. **Shadow maps** ([`shadow`]): 16 opacity maps perpendicular to the light.
 //! 2. **Projection**: every strand point is projected to the screen.
-//! 3. **Rasterising** ([`raster`], [`tile`]): the body ([`body`]) is ray cast into every
-//!    32×32-pixel tile; segments are binned into the tiles they touch, except where the body
-//!    hides them. Then the points that binned segments use get their Kajiya-Kay colour under
-//!    the maps' transmittance ([`shading`], [`point_colors`]): Zhang and Wünsche shade per
-//!    vertex and let the rasteriser interpolate colours (§6.1), and so does this renderer.
+//! 3. **Rasterising** ([`raster`], [`tile`]): the body is ray cast ([`body`]: spheres,
+//!    capsules, the scalp) and its meshes rasterised ([`mesh`]) into every 32×32-pixel
+//!    tile; segments are binned into the tiles they touch, except where the body hides them.
+//!    Then the points that binned segments use get their Kajiya-Kay colour under the maps'
+//!    transmittance ([`shading`], [`point_colors`]): Zhang and Wünsche shade per vertex and
+//!    let the rasteriser interpolate colours (§6.1), and so does this renderer.
 //!    Each tile sorts its segments by depth and blends them front to back on a supersampled
 //!    grid (a first pass puts them in 256 depth buckets; bucket by bucket, the segments that
 //!    hair already drawn or the body hides are culled, and only the rest are sorted and
@@ -30,7 +31,8 @@
 //!
 //! The files, bottom up (a file uses only those above it in this list): `num.rs` (numeric
 //! helpers), `camera.rs`, `shading.rs`, `body.rs`, `cull.rs` (the body culling before
-//! binning), `raster.rs` (binning and depth buckets), `shadow/`, `point_colors.rs`, `tile/`
+//! binning), `raster.rs` (binning and depth buckets), `mesh.rs` (the body's triangle meshes),
+//! `shadow/`, `point_colors.rs`, `tile/`
 //! (the tile's samples, its culling tests and the line rasteriser), `resolve.rs`, `stages.rs`
 //! (the stages' per-job functions), `finish.rs` (gather and postfilter), `output.rs` (the
 //! image and its encodings), `scene_16k.rs`, and this file. The thread pool is
@@ -45,6 +47,7 @@ pub mod body;
 pub mod camera;
 mod cull;
 mod finish;
+mod mesh;
 mod num;
 mod output;
 mod point_colors;
@@ -74,6 +77,7 @@ use crate::simd::Level;
 use camera::{normalize, ScreenVertex, View};
 use raster::{Bins, Grid, TILE};
 use shading::{srgb3_to_linear, HairShader};
+pub use stages::StageTimes;
 use stages::{
     count_half, fill_half, project_points, render_tile, shade_strands, split_by_strands, TileSetup,
 };
@@ -86,30 +90,8 @@ pub const MAX_SIDE: u32 = 8192;
 pub struct RenderInput<'a> {
     /// All strands, already smoothed polylines.
     pub strands: &'a StrandBuf,
-    /// Spheres and scalp ellipsoid as posed.
+    /// Spheres, capsules and scalp ellipsoid as posed; meshes in the rest frame with the pose.
     pub body: &'a BodyBuf,
-}
-
-/// Each stage's share of the last frame's wall-clock time (its share of the work done by all
-/// threads; on one thread, the time it took).
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
-pub struct StageTimes {
-    /// Building the 16 opacity shadow maps.
-    pub shadow_maps: Duration,
-    /// Projecting every strand point, and shading those that binned segments use.
-    pub shading: Duration,
-    /// Casting the body into the tiles, binning the segments, then the tile pass's sorting
-    /// and blending.
-    pub rasterising: Duration,
-    /// The tile pass's resolve (body shading, filters, sRGB) and the copy to the image.
-    pub resolve: Duration,
-}
-
-impl StageTimes {
-    /// All stages.
-    pub fn total(&self) -> Duration {
-        self.shadow_maps + self.shading + self.rasterising + self.resolve
-    }
 }
 
 /// Threads a renderer should use: every core (`WISPTREE_RENDER_THREADS` overrides, 1 to 64).
@@ -175,6 +157,8 @@ pub struct Renderer {
     far: Vec<f32>,
     bins: Bins,
     prims: Vec<body::Prim>,
+    /// The body's meshes, posed, projected and binned into the tiles.
+    meshes: mesh::Meshes,
     workers: Vec<Mutex<Worker>>,
     /// Per tile, its resolved linear pixels (TILE² × 3).
     tiles: Vec<Mutex<Vec<f32>>>,
@@ -276,6 +260,7 @@ impl Renderer {
             far: Vec::new(),
             bins: Bins::default(),
             prims: Vec::new(),
+            meshes: mesh::Meshes::default(),
             workers,
             tiles,
             linear: Vec::new(),
@@ -358,6 +343,10 @@ impl Renderer {
             (self.height as usize * ss) as f32,
         );
         body::prims(input.body, &view, ws, hs, &mut self.prims);
+        timed(&self.stage_ns[RASTER], || {
+            let base = self.prims.len() as u32;
+            self.meshes.prepare(input.body, &view, &self.grid, base);
+        });
         let half = 0.5 * self.params.strand_width * ss as f32;
         let reach = half * 1.5 + 1.0;
 
@@ -419,7 +408,13 @@ impl Renderer {
         let frame = self.maps.light_frame(&strands.points, light);
         let screen = split_by_strands::<_, CHUNKS>(&mut self.verts, &strands.offsets);
         let runs = split_parts::<_, CHUNKS>(&mut self.layers, |c| (c + 1) * nt / CHUNKS);
-        let (grid, prims, workers, ns) = (self.grid, &self.prims, &self.workers, &self.stage_ns);
+        let (grid, prims, meshes, workers, ns) = (
+            self.grid,
+            &self.prims,
+            &self.meshes,
+            &self.workers,
+            &self.stage_ns,
+        );
         let level = self.level;
         let (n_light, n_screen) = (shadow::LightFrame::CHUNKS, CHUNKS);
         let job = |k: usize, i: usize| {
@@ -448,7 +443,11 @@ impl Renderer {
                             grid.tile_samples(),
                             origin,
                             view,
-                            prims,
+                            tile::BodyParts {
+                                prims,
+                                mesh: meshes,
+                                tris: meshes.tile(t0 + j),
+                            },
                             layer,
                         );
                     }
@@ -543,6 +542,7 @@ impl Renderer {
         let resolve = resolve::Resolve {
             view,
             prims: &self.prims,
+            mesh: &self.meshes,
             maps: &self.maps,
             map_size: p.shadow_map_size as f32,
             background: srgb3_to_linear(p.background),

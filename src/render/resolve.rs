@@ -5,19 +5,22 @@
 
 use super::body::Prim;
 use super::camera::{add, dot, scale, View};
+use super::mesh::Meshes;
 use super::raster::TILE;
 use super::shading::LUT_SIZE;
 use super::shadow::ShadowMaps;
 use super::tile::TileBuf;
 use super::tile::OPAQUE;
 
-/// No primitive (primitive numbers are `u16`).
+/// No primitive (no body has this many).
 const NONE: u32 = u32::MAX;
 
 /// What the resolve needs of the frame.
 pub(crate) struct Resolve<'a> {
     pub view: &'a View,
     pub prims: &'a [Prim],
+    /// The meshes' triangles, primitives from `mesh.base` on.
+    pub mesh: &'a Meshes,
     pub maps: &'a ShadowMaps,
     pub map_size: f32,
     /// Linear colours.
@@ -36,8 +39,17 @@ impl Resolve<'_> {
     #[inline(never)]
     fn body_at(&self, x: f32, y: f32, t: f32, k: usize) -> [f32; 3] {
         let d = self.view.ray(x, y);
-        let p = add(self.view.eye, scale(d, t));
-        let n = self.prims[k].normal(p);
+        // The same shading and shadow lookup for every kind of body: only the surface point and
+        // its normal are found differently.
+        let (p, n) = match self.prims.get(k) {
+            Some(prim) => {
+                let p = add(self.view.eye, scale(d, t));
+                (p, prim.normal(p))
+            }
+            None => self
+                .mesh
+                .surface(k as u32 - self.mesh.base, self.view.eye, d, t),
+        };
         let lambert = dot(n, self.light).max(0.0);
         let trans = if lambert > 0.0 {
             let q = self.maps.light_space(p);
@@ -113,7 +125,7 @@ impl Resolve<'_> {
                         let mut c = [r, g, b];
                         if tr >= OPAQUE {
                             let base = if buf.zb[at].is_finite() {
-                                let k = buf.prim[at] as u32;
+                                let k = buf.prim[at];
                                 if k != shaded_prim {
                                     shaded = self.body_at(
                                         (buf.ox + i as i32) as f32 + 0.5,

@@ -2,7 +2,7 @@
 //! ([`crate::simd::dispatch`]) and called with the renderer's [`Level`].
 
 use std::sync::Mutex;
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
 use super::camera::{ScreenVertex, View};
 use super::raster::{self, Grid};
@@ -11,6 +11,28 @@ use crate::frame::StrandBuf;
 use crate::par::split_parts;
 use crate::simd::dispatch::multiversion;
 use crate::simd::Level;
+
+/// Each stage's share of the last frame's wall-clock time (its share of the work done by all
+/// threads; on one thread, the time it took).
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct StageTimes {
+    /// Building the 16 opacity shadow maps.
+    pub shadow_maps: Duration,
+    /// Projecting every strand point, and shading those that binned segments use.
+    pub shading: Duration,
+    /// Casting the body into the tiles, binning the segments, then the tile pass's sorting
+    /// and blending.
+    pub rasterising: Duration,
+    /// The tile pass's resolve (body shading, filters, sRGB) and the copy to the image.
+    pub resolve: Duration,
+}
+
+impl StageTimes {
+    /// All stages.
+    pub fn total(&self) -> Duration {
+        self.shadow_maps + self.shading + self.rasterising + self.resolve
+    }
+}
 
 /// What every tile of a frame shares.
 pub(super) struct TileSetup<'a> {

@@ -298,8 +298,16 @@ pub trait Solver: Send {
     fn inspect(&self, node: &NodeId, out: &mut Vec<(&'static str, f64)>) -> Result<(), String> {
         let _ = (node, out);
         Err(format!(
-            "the {} model has no node inspector yet (the AWT has)",
+            "the {} model has no node inspector yet (the AWT and layered have)",
             self.kind().name()
         ))
+    }
+
+    /// The node a user clicked in the 3D view: with a point (`near`, m), the drawn node whose
+    /// sphere surface is nearest it; else the one drawn as `instance` of the frame's nodes
+    /// ([`Solver::draw`] order). `None` when there is no such node or no inspector.
+    fn pick_node(&self, instance: Option<usize>, near: Option<[f64; 3]>) -> Option<NodeId> {
+        let _ = (instance, near);
+        None
     }
 }

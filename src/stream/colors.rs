@@ -63,6 +63,10 @@ pub(super) fn event_color(kind: EventKind) -> (u8, u8, u8) {
 pub(super) const MERGE_COLOR: (u8, u8, u8) = (40, 200, 230);
 pub(super) const BODY_COLOR: (u8, u8, u8, u8) = (170, 170, 180, 110);
 pub(super) const SCALP_COLOR: (u8, u8, u8) = (225, 190, 160);
+/// The inspected node's ring: magenta, a colour no level and no event uses.
+pub(super) const INSPECTED_COLOR: (u8, u8, u8) = (255, 40, 220);
+/// The ring's radius over the node's (it encloses the node's sphere).
+pub(super) const INSPECTED_SCALE: f32 = 1.3;
 /// Strand width on screen: thin and independent of zoom, so 10,000 strands stay readable.
 pub(super) const STRAND_RADIUS_UI: f32 = 1.0;
 /// Event markers: big enough to find in a frame.

@@ -14,6 +14,8 @@
 //! | `/head/scalp` | `Ellipsoids3D`: the scalp ellipsoid, rotated |
 //! | `/events/split`, `/events/merge` | `TextLog` per event + `Points3D` markers in the frame of the event |
 //! | `/stats/...`, `/params/...` | `Scalars` |
+//! | `/inspect/<tree>/<level>/<index>/<name>` | `Scalars`: the inspected node's numbers |
+//! | `/hair/inspected` | `Ellipsoids3D`: a ring around the inspected node |
 //! | `/log` | `TextLog`: free-text messages |
 //!
 //! Every entity holds all its instances (one row per frame), never one entity per node: the
@@ -22,6 +24,7 @@
 mod blueprint;
 mod body_shapes;
 mod colors;
+mod inspected;
 pub mod paths;
 mod runs_layout;
 pub mod sink;
@@ -183,6 +186,8 @@ pub struct Logger {
     /// Strand polylines, reused: the inner Vecs keep their capacity between frames.
     strands: Vec<rerun::components::LineStrip3D>,
     event_positions: Vec<[f32; 3]>,
+    /// Whether the inspected node's marker is drawn (cleared once, when inspecting stops).
+    inspected_drawn: bool,
     event_labels: Vec<String>,
     text: String,
     /// Whether the last frame logged markers of that kind (then an eventless frame clears them).
@@ -229,6 +234,7 @@ impl Logger {
             paths: Paths::new(&setup.prefix, "awt"),
             strands: Vec::new(),
             event_positions: Vec::new(),
+            inspected_drawn: false,
             event_labels: Vec::new(),
             text: String::new(),
             events_shown: [false; 4],
@@ -428,20 +434,6 @@ impl Logger {
                 self.rec.log(path, &Points3D::clear_fields())?;
                 *shown = false;
             }
-        }
-        Ok(())
-    }
-
-    /// The inspected node's numbers (`run --inspect`), each its own scalar at
-    /// `/inspect/<tree>/<level>/<index>/<name>`, so that a recording made with a node selected
-    /// can be reviewed later.
-    fn log_inspect(&mut self, frame: &Frame) -> anyhow::Result<()> {
-        let Some((node, values)) = &frame.inspect else {
-            return Ok(());
-        };
-        for (name, v) in values {
-            let path = format!("{}{}/{node}/{name}", self.paths.prefix, paths::INSPECT);
-            self.rec.log(path, &Scalars::single(*v))?;
         }
         Ok(())
     }

@@ -29,6 +29,8 @@ pub const NODES: &str = "/hair/awt/nodes";
 pub const SEGMENTS: &str = "/hair/awt/segments";
 /// The inspected node's numbers (`run --inspect`): `/inspect/<tree>/<level>/<index>/<name>`.
 pub const INSPECT: &str = "/inspect";
+/// The inspected node drawn among the model's nodes: a ring larger than the node.
+pub const INSPECTED_MARKER: &str = "/hair/inspected";
 /// The drawn hair strands.
 pub const STRANDS: &str = "/hair/strands";
 /// The body's collision spheres.

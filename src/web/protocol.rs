@@ -12,7 +12,7 @@ use std::sync::Mutex;
 use serde::{Deserialize, Serialize};
 
 use crate::solver::tunable::TunableView;
-use crate::solver::SolverKind;
+use crate::solver::{NodeId, SolverKind};
 
 /// A request as the page sends it (JSON, `type` names the kind). Anything else is refused.
 #[derive(Debug, Clone, Deserialize)]
@@ -44,6 +44,19 @@ pub enum WebRequest {
         /// A model name (`awt`, `single-level`, …).
         name: String,
     },
+    /// Inspect one node (`TREE:LEVEL:INDEX`, as `run --inspect` takes it), or none (`""`).
+    Inspect {
+        /// The node, or empty to stop inspecting.
+        node: String,
+    },
+    /// Inspect the node clicked in the viewer's 3D view: the viewer's selection event names
+    /// the instance of `/hair/awt/nodes` and the point clicked.
+    Pick {
+        /// The instance index within the frame's active nodes.
+        instance: Option<u64>,
+        /// The point clicked, in world coordinates (m).
+        position: Option<[f64; 3]>,
+    },
 }
 
 /// A checked request: what the simulation is asked to do.
@@ -59,7 +72,25 @@ pub enum WebCommand {
     Motion(String),
     /// Restart with this model.
     Model(SolverKind),
+    /// Inspect this node from the next frame on (`None`: stop inspecting).
+    Inspect(Option<NodeId>),
+    /// Inspect the node drawn as this instance, or nearest this point (see
+    /// [`crate::solver::Solver::pick_node`]).
+    Pick(NodePick),
 }
+
+/// A node clicked in the viewer: its instance among the frame's active nodes and the point
+/// clicked (either may be missing; one is there).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct NodePick {
+    /// The instance index.
+    pub instance: Option<usize>,
+    /// The point clicked, m.
+    pub position: Option<[f64; 3]>,
+}
+
+/// More instances than any frame draws: a larger index is a bad request.
+const MAX_INSTANCE: u64 = 100_000_000;
 
 /// A tunable's new value, checked against the running model's table as the page was shown it:
 /// what the page server sends the simulation thread directly.
@@ -115,6 +146,37 @@ pub fn check_request(req: WebRequest, state: &LiveState) -> Result<WebCommand, S
             }
         }
         WebRequest::Model { name } => SolverKind::parse(&name).map(WebCommand::Model),
+        WebRequest::Pick { instance, position } => {
+            if instance.is_none() && position.is_none() {
+                return Err("pick: neither an instance nor a position".to_owned());
+            }
+            if instance.is_some_and(|i| i >= MAX_INSTANCE) {
+                return Err(format!(
+                    "pick: instance {} is out of range",
+                    instance.unwrap()
+                ));
+            }
+            if position.is_some_and(|p| p.iter().any(|c| !c.is_finite() || c.abs() > 1e6)) {
+                return Err("pick: the position is not a point in the scene".to_owned());
+            }
+            Ok(WebCommand::Pick(NodePick {
+                instance: instance.map(|i| i as usize),
+                position,
+            }))
+        }
+        WebRequest::Inspect { node } => {
+            let node = node.trim();
+            if node.is_empty() {
+                return Ok(WebCommand::Inspect(None));
+            }
+            if node.len() > 40 {
+                return Err("inspect: a node is TREE:LEVEL:INDEX (0:1:12)".to_owned());
+            }
+            // Whether the node exists is the simulation's to say: it holds the model.
+            NodeId::parse(node)
+                .map(|n| WebCommand::Inspect(Some(n)))
+                .map_err(|e| format!("inspect {e}"))
+        }
     }
 }
 
@@ -158,6 +220,20 @@ pub struct LiveState {
     pub motions: Vec<String>,
     /// The latest lines of the run's log.
     pub log: VecDeque<LogLine>,
+    /// The inspected node's numbers at the latest frame (`None`: no node inspected).
+    pub inspect: Option<InspectedNode>,
+}
+
+/// One node's numbers as the page's inspector shows them (the same names and values a
+/// recording holds under `/inspect/<tree>/<level>/<index>/<name>`).
+#[derive(Debug, Clone, Default, PartialEq, Serialize)]
+pub struct InspectedNode {
+    /// `TREE:LEVEL:INDEX`.
+    pub node: String,
+    /// Simulated time of these numbers.
+    pub sim_time: f64,
+    /// The numbers by name, in the solver's order.
+    pub values: Vec<(&'static str, f64)>,
 }
 
 /// The state shared by the simulation thread (writer) and the page server (reader).
@@ -206,6 +282,12 @@ impl SharedState {
                 .collect();
             s.version += 1;
         }
+    }
+
+    /// The inspected node's numbers at the latest frame. Not a new version: like the time,
+    /// they change every frame and the page shows them at each poll.
+    pub fn inspect(&self, node: Option<InspectedNode>) {
+        self.lock().inspect = node;
     }
 
     /// Adds a line to the log every page lists.
@@ -349,6 +431,32 @@ mod tests {
             e.contains("strip break ratio") && e.contains("between"),
             "{e}"
         );
+    }
+
+    #[test]
+    fn the_inspector_takes_a_node_or_none() {
+        assert_eq!(
+            parse_request(r#"{"type":"inspect","node":" 3:1:12 "}"#, &state()),
+            Ok(WebCommand::Inspect(Some(NodeId {
+                tree: 3,
+                level: 1,
+                index: 12
+            })))
+        );
+        assert_eq!(
+            parse_request(r#"{"type":"inspect","node":""}"#, &state()),
+            Ok(WebCommand::Inspect(None))
+        );
+        for (body, needle) in [
+            (r#"{"type":"inspect","node":"3:1"}"#, "TREE:LEVEL:INDEX"),
+            (r#"{"type":"inspect","node":"3:-1:2"}"#, "LEVEL `-1`"),
+            (r#"{"type":"inspect","node":7}"#, "not a request"),
+        ] {
+            let e = parse_request(body, &state()).unwrap_err();
+            assert!(e.contains(needle), "{body}: {e}");
+        }
+        let long = format!(r#"{{"type":"inspect","node":"{}"}}"#, "1".repeat(100));
+        assert!(parse_request(&long, &state()).is_err());
     }
 
     #[test]

@@ -1,5 +1,5 @@
-//! The control page's HTTP server: the page itself, the live state as JSON, and one control
-//! endpoint that accepts only the page's own requests from the page's own origin.
+//! The control page's HTTP server: the page itself, the Rerun viewer's script and wasm (which
+//! the page runs), the live state as JSON, and one control endpoint that accepts only the page's own requests from the page's own origin.
 //!
 //! Why so strict: anything on the user's machine (any web page in any tab) can send requests to
 //! a port on 127.0.0.1. A request is taken only when its `Host` names this server (no DNS
@@ -66,6 +66,9 @@ impl ControlPage {
             hosts: allowed_hosts(cfg.bind, addr.port()),
             any_host: cfg.bind.is_unspecified(),
             page: page_html(&cfg),
+            viewer: re_web_viewer_server::WebViewerData::load(None)
+                .map_err(|e| anyhow::anyhow!("{e}"))
+                .context("the Rerun web viewer's files")?,
             state,
             commands,
             tunes,
@@ -134,24 +137,37 @@ struct Serving {
     hosts: Vec<String>,
     any_host: bool,
     page: String,
+    /// The Rerun web viewer's script and wasm, which the page loads to host the viewer.
+    viewer: re_web_viewer_server::WebViewerData,
     state: Arc<SharedState>,
     commands: Sender<WebCommand>,
     tunes: Sender<SetTunable>,
 }
 
-/// A reply: status and JSON or HTML body.
+/// A reply: status, body and its type.
 struct Reply {
     status: u16,
-    body: String,
-    html: bool,
+    body: Vec<u8>,
+    content_type: &'static str,
+    /// The viewer's files do not change while the program runs: the browser may keep them.
+    cacheable: bool,
 }
 
 impl Reply {
     fn json(status: u16, value: serde_json::Value) -> Reply {
         Reply {
             status,
-            body: value.to_string(),
-            html: false,
+            body: value.to_string().into_bytes(),
+            content_type: "application/json",
+            cacheable: false,
+        }
+    }
+    fn asset(body: &[u8], content_type: &'static str) -> Reply {
+        Reply {
+            status: 200,
+            body: body.to_vec(),
+            content_type,
+            cacheable: true,
         }
     }
     fn error(status: u16, msg: impl Into<String>) -> Reply {
@@ -165,15 +181,15 @@ impl Reply {
 impl Serving {
     fn handle(&self, mut req: Request) {
         let reply = self.route(&mut req);
-        let ctype = if reply.html {
-            "text/html; charset=utf-8"
+        let cache = if reply.cacheable {
+            "max-age=3600"
         } else {
-            "application/json"
+            "no-store"
         };
-        let mut resp = Response::from_string(reply.body).with_status_code(reply.status);
+        let mut resp = Response::from_data(reply.body).with_status_code(reply.status);
         for (k, v) in [
-            ("Content-Type", ctype),
-            ("Cache-Control", "no-store"),
+            ("Content-Type", reply.content_type),
+            ("Cache-Control", cache),
             ("X-Content-Type-Options", "nosniff"),
             // Nobody else may frame the controls (clickjacking).
             ("Content-Security-Policy", "frame-ancestors 'none'"),
@@ -194,9 +210,16 @@ impl Serving {
         match (req.method(), path.as_str()) {
             (Method::Get, "/") => Reply {
                 status: 200,
-                body: self.page.clone(),
-                html: true,
+                body: self.page.clone().into_bytes(),
+                content_type: "text/html; charset=utf-8",
+                cacheable: false,
             },
+            (Method::Get, "/viewer/re_viewer.js") => {
+                Reply::asset(self.viewer.viewer_js(), "text/javascript")
+            }
+            (Method::Get, "/viewer/re_viewer_bg.wasm") => {
+                Reply::asset(self.viewer.viewer_wasm(), "application/wasm")
+            }
             (Method::Get, "/api/state") => match serde_json::to_value(self.state.snapshot()) {
                 Ok(v) => Reply::json(200, v),
                 Err(e) => Reply::error(500, e.to_string()),

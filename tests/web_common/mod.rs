@@ -173,6 +173,8 @@ fn unsafe_sigint(pid: u32) {
 #[derive(Debug)]
 pub struct Reply {
     pub status: u16,
+    /// The status line and headers.
+    pub head: String,
     pub body: String,
 }
 
@@ -255,6 +257,7 @@ pub fn try_http(
     };
     Ok(Reply {
         status,
+        head,
         body: String::from_utf8_lossy(&body).to_string(),
     })
 }

@@ -80,8 +80,9 @@ pub(crate) struct TileBuf {
     pub px: Vec<Px>,
     /// View depth of the body, `INFINITY` where there is none.
     pub zb: Vec<f32>,
-    /// Which body primitive is there.
-    pub prim: Vec<u16>,
+    /// Which body primitive is there (a sphere or the scalp, or a mesh triangle from
+    /// [`super::mesh::Meshes::base`] on).
+    pub prim: Vec<u32>,
     /// Samples not yet opaque.
     pub alive: usize,
     /// No hair in the tile this frame ([`TileBuf::take_body`]): `px` is stale and every
@@ -198,7 +199,7 @@ impl TileBuf {
         let dx = super::camera::sub(view.ray(fx0 + 1.5, fy0 + 0.5), d00);
         let dy = super::camera::sub(view.ray(fx0 + 0.5, fy0 + 1.5), d00);
         for (k, p) in prims.iter().enumerate() {
-            let k_prim = k as u16;
+            let k_prim = k as u32;
             let [rx0, ry0, rx1, ry1] = p.rect;
             if rx1 < fx0 || rx0 > fx1 || ry1 < fy0 || ry0 > fy1 {
                 continue;
@@ -283,6 +284,15 @@ multiversion! {
     }
 }
 
+/// What a tile's body cast draws: the ray-cast primitives (spheres, capsules, the scalp), and
+/// the mesh triangles that reach the tile.
+#[derive(Clone, Copy)]
+pub(crate) struct BodyParts<'a> {
+    pub prims: &'a [super::body::Prim],
+    pub mesh: &'a super::mesh::Meshes,
+    pub tris: &'a [u32],
+}
+
 multiversion! {
     /// [`TileBuf::cast_layer`], compiled for AVX2 too (eight samples at a time).
     pub(crate) fn cast_layer(
@@ -290,22 +300,24 @@ multiversion! {
         n: usize,
         origin: (i32, i32),
         view: &View,
-        prims: &[super::body::Prim],
+        parts: BodyParts,
         layer: &mut BodyLayer,
     ) {
-        buf.cast_layer(n, origin, view, prims, layer);
+        buf.cast_layer(n, origin, view, parts, layer);
     }
 }
 
 impl TileBuf {
-    /// Casts the body of the `n`² samples at `(ox, oy)` into `layer` (this buffer is scratch).
+    /// Casts the body of the `n`² samples at `(ox, oy)` into `layer` (this buffer is scratch):
+    /// the spheres and scalp `prims`, then the mesh triangles `tris` of `mesh` that reach the
+    /// tile.
     #[inline(always)]
     pub fn cast_layer(
         &mut self,
         n: usize,
         (ox, oy): (i32, i32),
         view: &View,
-        prims: &[super::body::Prim],
+        BodyParts { prims, mesh, tris }: BodyParts,
         layer: &mut BodyLayer,
     ) {
         // Only the body part of the buffer: its samples are not used here.
@@ -313,6 +325,10 @@ impl TileBuf {
         self.set_blocks(n);
         self.reset_body();
         self.cast_body(view, prims);
+        if !tris.is_empty() {
+            self.body_seen |=
+                super::mesh::cast(mesh, tris, (n, ox, oy), &mut self.zb, &mut self.prim);
+        }
         self.close_blocks();
         (layer.ox, layer.oy) = (ox, oy);
         layer.body_seen = self.body_seen;

@@ -20,7 +20,17 @@ fn sphere_tile() -> (View, BodyLayer) {
     };
     let view = View::new(&cam, 64, 64);
     let (mut buf, mut layer) = (TileBuf::default(), BodyLayer::default());
-    buf.cast_layer(64, (0, 0), &view, &sphere_prims(&view), &mut layer);
+    buf.cast_layer(
+        64,
+        (0, 0),
+        &view,
+        BodyParts {
+            prims: &sphere_prims(&view),
+            mesh: &Default::default(),
+            tris: &[],
+        },
+        &mut layer,
+    );
     (view, layer)
 }
 
@@ -75,6 +85,7 @@ fn a_tile_without_hair_resolves_as_if_cleared_without_reading_its_samples() {
     let resolve = super::super::resolve::Resolve {
         view: &view,
         prims: &prims,
+        mesh: &Default::default(),
         maps: &maps,
         map_size: 16.0,
         background: [0.3, 0.5, 0.7],
@@ -88,7 +99,12 @@ fn a_tile_without_hair_resolves_as_if_cleared_without_reading_its_samples() {
         let cast = || {
             let (mut scratch, mut layer) = (TileBuf::default(), BodyLayer::default());
             let p: &[super::super::body::Prim] = if with_body { &prims } else { &[] };
-            scratch.cast_layer(64, (0, 0), &view, p, &mut layer);
+            let parts = BodyParts {
+                prims: p,
+                mesh: &Default::default(),
+                tris: &[],
+            };
+            scratch.cast_layer(64, (0, 0), &view, parts, &mut layer);
             layer
         };
         let mut cleared = TileBuf::default();

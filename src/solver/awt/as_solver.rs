@@ -119,4 +119,28 @@ impl Solver for Simulation {
     ) -> Result<(), String> {
         Simulation::inspect(self, node, out)
     }
+
+    fn pick_node(
+        &self,
+        instance: Option<usize>,
+        near: Option<[f64; 3]>,
+    ) -> Option<super::inspect::NodeId> {
+        let s = &self.slots;
+        let slot = match near {
+            // The click lands on a sphere's surface: the node whose surface is nearest.
+            Some(p) => {
+                let p = Vector3::new(p[0], p[1], p[2]);
+                (0..s.len()).min_by(|&a, &b| {
+                    let gap = |c: usize| ((s.pos[c] - p).norm() - s.radius[c]).abs();
+                    gap(a).total_cmp(&gap(b))
+                })?
+            }
+            None => instance.filter(|&c| c < s.len())?,
+        };
+        Some(super::inspect::NodeId::of(
+            &self.model,
+            s.level[slot] as usize,
+            s.node[slot] as usize,
+        ))
+    }
 }

@@ -38,6 +38,20 @@ impl NodeId {
         })
     }
 
+    /// The name of node `j` (`g·K + i`: GC `g`, cross-section `i`) of level `level` of model
+    /// `m`: the inverse of [`resolve`].
+    pub fn of(m: &HairModel, level: usize, j: usize) -> NodeId {
+        let lv = &m.levels[level];
+        let (g, i) = (j / m.k, j % m.k);
+        let tree = lv.tree[g];
+        let before = (0..g).filter(|&h| lv.tree[h] == tree).count();
+        NodeId {
+            tree,
+            level,
+            index: before * m.k + i,
+        }
+    }
+
     /// `tree/level/index`, the node's path under `/inspect`.
     pub fn path(&self) -> String {
         format!("{}/{}/{}", self.tree, self.level, self.index)
@@ -45,7 +59,7 @@ impl NodeId {
 }
 
 /// The names [`Simulation::inspect`] fills, in its order (each logged as its own scalar).
-pub const INSPECT_NAMES: [&str; 17] = [
+pub const INSPECT_NAMES: [&str; 26] = [
     "active",
     "gc",
     "cross_section",
@@ -63,6 +77,15 @@ pub const INSPECT_NAMES: [&str; 17] = [
     "merge_radius",
     "last_change_s",
     "height",
+    "position_x",
+    "position_y",
+    "position_z",
+    "velocity_x",
+    "velocity_y",
+    "velocity_z",
+    "acceleration_x",
+    "acceleration_y",
+    "acceleration_z",
 ];
 
 /// The level's GC and cross-section of node `id` of model `m`, or why there is none.
@@ -115,6 +138,8 @@ impl Simulation {
     ///   distance from their centre of mass (`merge_spread`) against the super-node's radius
     ///   times the merge radius factor (`merge_radius`).
     /// * `last_change_s`: simulated time at which the node last became active or inactive.
+    /// * `position_*`, `velocity_*`, `acceleration_*`: the node's state in world axes (`height`
+    ///   is `position_y`, kept for recordings made before the vectors were logged).
     pub fn inspect(&self, id: &NodeId, out: &mut Vec<(&'static str, f64)>) -> Result<(), String> {
         let (g, i) = resolve(&self.model, id)?;
         let m = &self.model;
@@ -174,6 +199,15 @@ impl Simulation {
             // `adapt` runs once per step: its counter is a step number.
             since as f64 * p.dt,
             st.pos[j].y,
+            st.pos[j].x,
+            st.pos[j].y,
+            st.pos[j].z,
+            st.vel[j].x,
+            st.vel[j].y,
+            st.vel[j].z,
+            st.acc[j].x,
+            st.acc[j].y,
+            st.acc[j].z,
         ]));
         Ok(())
     }

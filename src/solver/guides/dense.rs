@@ -42,6 +42,10 @@ pub struct Dense {
     pub guide: Vec<u32>,
     /// Per strand × blend: weight (they sum to 1).
     pub weight: Vec<f64>,
+    /// Per strand × blend: the root distance the weight comes from.
+    dist: Vec<f64>,
+    /// The guides (slot, rest root) of the last binding.
+    bound: Vec<(usize, Vector3<f64>)>,
     /// Per strand point: rest position in the strand's root frame, relative to its root.
     pub local: Vec<Vector3<f64>>,
     /// Per strand: root frame at rest.
@@ -59,6 +63,8 @@ impl Dense {
             blend,
             guide: vec![u32::MAX; n * blend],
             weight: vec![0.0; n * blend],
+            dist: vec![f64::INFINITY; n * blend],
+            bound: Vec::new(),
             local: Vec::with_capacity(n * k),
             frame: Vec::with_capacity(n),
             points: model.strands.rest.clone(),
@@ -77,32 +83,76 @@ impl Dense {
 
     /// Chooses each strand's `blend` nearest guides among `roots` (slot, rest root), weights by
     /// inverse distance. Ties go to the lower slot, so the binding is deterministic.
+    ///
+    /// Only what changed since the last binding is searched again (the §4.3 guides come and go
+    /// one at a time, and a full search of every strand against every guide took a sixth of a
+    /// `shake` step on Long curly): a strand bound to no guide that left only has to weigh its
+    /// nearest guides against the guides that came, since the nearest `blend` of a set with one
+    /// more element are among the old nearest and the new one; a strand bound to a guide that
+    /// left is searched again in full. The result is the full search's, bit for bit: the same
+    /// order `(distance, slot)` decides, and the weights come from the same list.
     // (`j` indexes the nearest guides and their weights alike.)
     #[allow(clippy::needless_range_loop)]
     pub fn bind(&mut self, model: &HairModel, roots: &[(usize, Vector3<f64>)]) {
+        let same = |a: &(usize, Vector3<f64>), b: &(usize, Vector3<f64>)| a.0 == b.0 && a.1 == b.1;
+        let gone: Vec<u32> = self
+            .bound
+            .iter()
+            .filter(|o| !roots.iter().any(|r| same(o, r)))
+            .map(|o| o.0 as u32)
+            .collect();
+        let came: Vec<(usize, Vector3<f64>)> = if self.bound.is_empty() {
+            Vec::new()
+        } else {
+            roots
+                .iter()
+                .filter(|r| !self.bound.iter().any(|o| same(o, r)))
+                .copied()
+                .collect()
+        };
+        let full = self.bound.is_empty();
+        self.bound.clear();
+        self.bound.extend_from_slice(roots);
         let k = model.k;
         let b = self.blend;
         let mut near: Vec<(f64, usize)> = Vec::with_capacity(b + 1);
         for s in 0..model.strands.len() {
-            let r = model.strands.rest[s * k];
-            near.clear();
-            for &(g, rg) in roots {
-                let d = (rg - r).norm();
-                if near.len() < b || (d, g) < near[near.len() - 1] {
-                    let at = near.partition_point(|e| *e < (d, g));
-                    near.insert(at, (d, g));
-                    near.truncate(b);
+            let slots = &self.guide[s * b..(s + 1) * b];
+            let search = |near: &mut Vec<(f64, usize)>, from: &[(usize, Vector3<f64>)]| {
+                let r = model.strands.rest[s * k];
+                for &(g, rg) in from {
+                    let d = (rg - r).norm();
+                    if near.len() < b || (d, g) < near[near.len() - 1] {
+                        let at = near.partition_point(|e| *e < (d, g));
+                        near.insert(at, (d, g));
+                        near.truncate(b);
+                    }
                 }
+            };
+            near.clear();
+            if full || slots.iter().any(|g| gone.contains(g)) {
+                search(&mut near, roots);
+            } else {
+                if came.is_empty() {
+                    continue;
+                }
+                for (&g, &d) in slots.iter().zip(&self.dist[s * b..(s + 1) * b]) {
+                    if g != u32::MAX {
+                        near.push((d, g as usize));
+                    }
+                }
+                search(&mut near, &came);
             }
             let w: Vec<f64> = near.iter().map(|(d, _)| 1.0 / (d + 1e-3)).collect();
             let sum: f64 = w.iter().sum();
             for j in 0..b {
-                let (g, wt) = match near.get(j) {
-                    Some(&(_, g)) => (g as u32, w[j] / sum),
-                    None => (u32::MAX, 0.0),
+                let (g, wt, d) = match near.get(j) {
+                    Some(&(d, g)) => (g as u32, w[j] / sum, d),
+                    None => (u32::MAX, 0.0, f64::INFINITY),
                 };
                 self.guide[s * b + j] = g;
                 self.weight[s * b + j] = wt;
+                self.dist[s * b + j] = d;
             }
         }
     }

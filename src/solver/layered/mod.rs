@@ -16,6 +16,7 @@
 pub mod body;
 pub mod detect;
 pub mod forces;
+pub mod inspect;
 pub mod params;
 pub mod response;
 pub mod shapes;
@@ -425,6 +426,22 @@ impl Solver for LayeredSolver {
 
     fn reserved_bytes(&self) -> usize {
         self.detector.capacity_bytes() + self.section_cache.capacity_bytes()
+    }
+
+    fn inspect(
+        &self,
+        node: &crate::solver::NodeId,
+        out: &mut Vec<(&'static str, f64)>,
+    ) -> Result<(), String> {
+        LayeredSolver::inspect(self, node, out)
+    }
+
+    fn pick_node(
+        &self,
+        instance: Option<usize>,
+        near: Option<[f64; 3]>,
+    ) -> Option<crate::solver::NodeId> {
+        self.pick(instance, near)
     }
 }
 

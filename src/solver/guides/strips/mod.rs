@@ -174,6 +174,8 @@ pub struct Strips {
     /// Per entry of `tri_entries`: its triangle's box grown by the reach, as `f32` rounded
     /// outwards (low x, y, z, high x, y, z), side by side for a vertex to test eight at once.
     ebox: [Vec<f32>; 6],
+    /// The same of the segments' boxes, per entry of `entries`.
+    sbox: [Vec<f32>; 6],
     /// The alive guides' vertices (roots left out) by grid cell (`detect`).
     vkeys: Vec<(u64, u32)>,
     /// The pieces' findings.
@@ -274,6 +276,7 @@ impl Strips {
             + self.tri_guides.capacity() * 8
             + self.vkeys.capacity() * 16
             + self.ebox.iter().map(|b| b.capacity() * 4).sum::<usize>()
+            + self.sbox.iter().map(|b| b.capacity() * 4).sum::<usize>()
             + self
                 .chunks
                 .iter()
