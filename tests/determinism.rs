@@ -15,6 +15,12 @@
 //! two buffers to the forces in order, instead of adding every contact straight into the
 //! forces; only the rounding of those sums changed. The same hashes come out on one thread or
 //! two and with `WISPTREE_SIMD=off`.
+//!
+//! Re-recorded a third time (issue 28, a full head of hair): the built-in styles changed
+//! (`fan_out`, wider and denser root regions, key strands kept off the body), so the hair the
+//! runs start from changed; the simulation did not. The style files of main before that change
+//! still give the previous hashes (0x0c30_925a_06ba_52f7, 0xdc68_5e02_9d4f_462b,
+//! 0x5bf9_05fd_23cf_13c9) with this code.
 
 use wisptree::scene::Scene;
 use wisptree::solver::{Solver, SolverKind};
@@ -82,6 +88,6 @@ fn single_level_short_under_run_is_bit_identical_to_before_the_restructure() {
     assert_eq!(h, SHORT_RUN_SINGLE, "got {h:#018x}");
 }
 
-const LONG_LEAN: u64 = 0x0c30_925a_06ba_52f7;
-const SHORT_CURLY_SHAKE: u64 = 0xdc68_5e02_9d4f_462b;
-const SHORT_RUN_SINGLE: u64 = 0x5bf9_05fd_23cf_13c9;
+const LONG_LEAN: u64 = 0xa2fb_d934_2dda_3909;
+const SHORT_CURLY_SHAKE: u64 = 0x9963_977d_6ffc_f66a;
+const SHORT_RUN_SINGLE: u64 = 0x87db_ec5c_e534_1467;

@@ -387,7 +387,9 @@ fn the_four_paper_styles() {
         let st = &s.style;
         let hair = grow(&s);
         let n = hair.strands.len();
-        assert!((9_000..=11_000).contains(&n), "{file}: {n} strands");
+        // About 10,000 strands at 20-22 per cm², with 30-60 per cm² on the regions seen from
+        // above (since issue 28, so that the hair hides the scalp there).
+        assert!((11_000..=17_000).contains(&n), "{file}: {n} strands");
         assert!(
             (0.5..=2.0).contains(&st.sim.total_mass),
             "{file}: mass {}",

@@ -34,5 +34,5 @@ fn bench_render_writes_one_row_per_scene() {
     assert_eq!(zhang["strands"], 16215);
     assert!(zhang["segments"].as_u64().unwrap() > 350_000, "{zhang}");
     // Every Long strand of the model is rendered, not the display subset.
-    assert_eq!(rows[0]["strands"], 10156);
+    assert_eq!(rows[0]["strands"], 12797);
 }
