@@ -189,9 +189,15 @@ fn bad_inspect_requests_exit_2_naming_the_node() {
     let (code, err) = run(&["--inspect", "one:0:0"]);
     assert_eq!(code, Some(2), "{err}");
     assert!(err.contains("TREE"), "{err}");
-    let (code, err) = run(&["--inspect", "0:0:0", "--model", "guides"]);
+    let (code, err) = run(&["--inspect", "0:1:0", "--model", "guides"]);
     assert_eq!(code, Some(2), "{err}");
-    assert!(err.contains("no node inspector"), "{err}");
+    assert!(err.contains("one level (GUIDE:0:VERTEX)"), "{err}");
+    let (code, err) = run(&["--inspect", "100000:0:0", "--model", "guides"]);
+    assert_eq!(code, Some(2), "{err}");
+    assert!(err.contains("guide 100000 does not exist"), "{err}");
+    let (code, err) = run(&["--inspect", "0:0:99", "--model", "guides"]);
+    assert_eq!(code, Some(2), "{err}");
+    assert!(err.contains("vertex 99 does not exist"), "{err}");
     let (code, err) = run(&["--inspect", "0:1:0", "--model", "layered"]);
     assert_eq!(code, Some(2), "{err}");
     assert!(err.contains("one level of wisps"), "{err}");
@@ -271,11 +277,6 @@ fn a_node_clicked_in_the_view_is_the_one_drawn_there() {
         );
     }
     assert_eq!(s.pick_node(Some(nodes.positions.len()), None), None);
-    // A model without an inspector picks nothing.
-    let guides = Scene::load(STYLE, MOTION, SolverKind::Guides)
-        .unwrap()
-        .solver();
-    assert_eq!(guides.pick_node(Some(0), Some([0.0, 1.6, 0.0])), None);
 }
 
 #[test]
@@ -353,4 +354,80 @@ fn a_layered_wisp_point_shows_its_state_and_its_wisps_contacts() {
         )
         .unwrap_err();
     assert!(e.contains("point 100000 does not exist"), "{e}");
+}
+
+#[test]
+fn a_guide_vertex_shows_its_state_contacts_links_and_strips() {
+    let scene = Scene::load(STYLE, MOTION, SolverKind::Guides).unwrap();
+    let mut s = scene.solver();
+    let mut r = s.new_report();
+    let mut v = Vec::new();
+    let (mut seen_contacts, mut seen_links, mut seen_strips) = (false, false, false);
+    for _ in 0..20 {
+        for _ in 0..s.steps_per_frame() {
+            s.step(&mut r);
+        }
+        let mut frame = wisptree::frame::Frame::default();
+        s.sync_display();
+        s.draw(&mut frame);
+        let nodes = &frame.nodes;
+        for c in (0..nodes.positions.len()).step_by(7) {
+            // The vertex drawn as instance c, and clicked on its centre: the same vertex.
+            let id = s.pick_node(Some(c), None).unwrap();
+            let p = nodes.positions[c].map(|x| x as f64);
+            s.inspect(&id, &mut v).unwrap();
+            assert_eq!(get(&v, "guide"), id.tree as f64);
+            assert_eq!(get(&v, "vertex"), id.index as f64);
+            for (k, axis) in ["position_x", "position_y", "position_z"]
+                .iter()
+                .enumerate()
+            {
+                assert!((get(&v, axis) - p[k]).abs() < 1e-5, "{id:?} {axis}");
+            }
+            let exact = [
+                get(&v, "position_x"),
+                get(&v, "position_y"),
+                get(&v, "position_z"),
+            ];
+            assert_eq!(s.pick_node(None, Some(exact)), Some(id));
+            // The vertex's own contacts are among its guide's; a link intact is below the
+            // stretch that breaks it; a triangle not broken is within the strips' ratio.
+            let (own, all) = (get(&v, "vertex_contacts"), get(&v, "guide_contacts"));
+            assert!(own <= all, "{v:?}");
+            let (links, broken) = (get(&v, "links"), get(&v, "links_broken"));
+            assert!(broken <= links, "{v:?}");
+            if links > broken {
+                assert!(
+                    get(&v, "link_stretch_max") < get(&v, "link_break_stretch"),
+                    "{v:?}"
+                );
+            }
+            let (tris, tris_broken) = (
+                get(&v, "strip_triangles"),
+                get(&v, "strip_triangles_broken"),
+            );
+            assert!(tris_broken <= tris, "{v:?}");
+            // (The width is today's; the break was decided at the step's start, §4.2.)
+            assert_eq!(tris > 0.0, get(&v, "strip_width_ratio_max") > 0.0, "{v:?}");
+            seen_contacts |= all > 0.0;
+            seen_links |= links > 0.0;
+            seen_strips |= tris > 0.0;
+        }
+    }
+    assert!(
+        seen_contacts && seen_links && seen_strips,
+        "in 20 frames of {MOTION} no guide inspected had contacts ({seen_contacts}), links \
+         ({seen_links}) or strip triangles ({seen_strips})"
+    );
+    let e = s
+        .inspect(
+            &NodeId {
+                tree: 0,
+                level: 0,
+                index: 100,
+            },
+            &mut v,
+        )
+        .unwrap_err();
+    assert!(e.contains("vertex 100 does not exist"), "{e}");
 }

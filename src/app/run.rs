@@ -126,10 +126,11 @@ pub fn run_with(opts: RunOptions, stop: StopSignal) -> anyhow::Result<RunSummary
                 &scene.loaded.style.layered,
                 node,
             ),
-            other => Err(format!(
-                "the {} model has no node inspector yet (the AWT and layered have)",
-                other.name()
-            )),
+            SolverKind::Guides => crate::solver::guides::inspect::resolve(
+                &scene.model,
+                &scene.loaded.style.guides,
+                node,
+            ),
         };
         checked
             .map_err(|e| BadInput(format!("--inspect {}: {e}", node.path().replace('/', ":"))))?;

@@ -61,7 +61,9 @@ pub struct RunArgs {
     /// Ask one AWT node why it split or has not merged: log, every frame, its split test
     /// (|a|·r against the threshold, whether it may split) and its merge test against its
     /// siblings under `/inspect/TREE/LEVEL/INDEX/<name>`. INDEX counts the tree's nodes of that
-    /// level, GC by GC, root to tip (`0:1:12`)
+    /// level, GC by GC, root to tip (`0:1:12`). The layered model names a skeleton point
+    /// `WISP:0:POINT`, the guide strands a vertex `GUIDE:0:VERTEX` (its contacts, static links
+    /// and strip triangles)
     #[arg(long, value_name = "TREE:LEVEL:INDEX", value_parser = crate::solver::NodeId::parse)]
     pub inspect: Option<crate::solver::NodeId>,
 

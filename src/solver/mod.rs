@@ -298,7 +298,7 @@ pub trait Solver: Send {
     fn inspect(&self, node: &NodeId, out: &mut Vec<(&'static str, f64)>) -> Result<(), String> {
         let _ = (node, out);
         Err(format!(
-            "the {} model has no node inspector yet (the AWT and layered have)",
+            "the {} model has no node inspector",
             self.kind().name()
         ))
     }

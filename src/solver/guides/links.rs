@@ -13,6 +13,9 @@ use nalgebra::Vector3;
 
 use super::chain::Chains;
 
+/// The stretch at which a link breaks for good (Fig. 2: its spring constant has fallen to 0).
+pub const BREAK_STRETCH: f64 = 2.0;
+
 /// The spring-constant factor of a link at stretch `s` (Fig. 2): 1 up to 1, a smooth
 /// (cosine) fall between 1 and 2, 0 from 2 on. The paper's curve is drawn, not written; a
 /// cosine fall is "gradual" at both ends.
@@ -176,7 +179,7 @@ impl Links {
             let d = p - anchor;
             let s = d.norm() / self.reference[k];
             self.stretch[k] = s;
-            if s >= 2.0 {
+            if s >= BREAK_STRETCH {
                 self.broken[k] = true;
                 continue;
             }

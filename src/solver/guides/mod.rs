@@ -11,6 +11,7 @@ pub mod body;
 pub mod chain;
 pub mod dense;
 mod display;
+pub mod inspect;
 pub mod links;
 pub mod obstacle;
 pub mod params;

@@ -198,4 +198,20 @@ impl Solver for GuideSolver {
     fn reserved_bytes(&self) -> usize {
         self.strips.reserved_bytes()
     }
+
+    fn inspect(
+        &self,
+        node: &crate::solver::NodeId,
+        out: &mut Vec<(&'static str, f64)>,
+    ) -> Result<(), String> {
+        GuideSolver::inspect(self, node, out)
+    }
+
+    fn pick_node(
+        &self,
+        instance: Option<usize>,
+        near: Option<[f64; 3]>,
+    ) -> Option<crate::solver::NodeId> {
+        self.pick(instance, near)
+    }
 }

@@ -182,6 +182,30 @@ pub struct Strips {
     chunks: Vec<Mutex<Chunk>>,
 }
 
+impl Strips {
+    /// Contacts of the last sub-step touching chain vertex `v`, and touching any vertex in
+    /// `guide` (a guide's vertices): a vertex–triangle contact touches its vertex and the
+    /// triangle's corners, a segment pair both ends of both segments. For the inspector.
+    pub fn contacts_touching(&self, v: u32, guide: std::ops::Range<u32>) -> (usize, usize) {
+        let (mut own, mut of_guide) = (0, 0);
+        let mut count = |touched: &[u32]| {
+            own += touched.contains(&v) as usize;
+            of_guide += touched.iter().any(|w| guide.contains(w)) as usize;
+        };
+        for m in &self.chunks {
+            let chunk = m.lock().unwrap_or_else(|e| e.into_inner());
+            for h in &chunk.tri_hits {
+                let [a, b, c] = self.tri[h.t as usize];
+                count(&[h.v, a, b, c]);
+            }
+            for h in &chunk.seg_hits {
+                count(&[h.va, h.va + 1, h.vb, h.vb + 1]);
+            }
+        }
+        (own, of_guide)
+    }
+}
+
 const BIAS: i64 = 1 << 20;
 
 /// Pairs more aligned than this orientation factor (about 11°) are not candidates: their
