@@ -51,6 +51,9 @@ impl Shapes<'_> {
     }
 }
 
+/// Most rounds of pushing a vertex out of the body's spheres, one sphere per round.
+const SPHERE_ROUNDS: usize = 6;
+
 /// Whether `x` is within `margin` of a sphere: the index of the deepest one.
 pub fn inside(spheres: &[PosedSphere], x: &Vector3<f64>, margin: f64) -> Option<usize> {
     let mut best: Option<(f64, usize)> = None;
@@ -89,7 +92,15 @@ pub fn correct(
             .try_normalize(1e-12)
             .unwrap_or_else(|| (x[i] - x[i - 1]).normalize());
         let mut p = x[i - 1] + dir * lens[i - 1];
-        if let Some(k) = inside(spheres, &p, margin) {
+        // Out of the deepest sphere, then out of any other it was pushed into: the body's
+        // spheres overlap (neck, shoulders, torso), and a vertex pushed out of one along its
+        // normal can land inside its neighbour. Pushing out of each in turn ends outside all of
+        // them within a few rounds, in the crease between them.
+        let mut touched = false;
+        for _ in 0..SPHERE_ROUNDS {
+            let Some(k) = inside(spheres, &p, margin) else {
+                break;
+            };
             let s = &spheres[k];
             let nrm = (p - s.center)
                 .try_normalize(1e-12)
@@ -99,9 +110,12 @@ pub fn correct(
             let rel = v[i] - vb;
             let vn = rel.dot(&nrm);
             let vt = rel - nrm * vn;
-            v[i] = vb + nrm * vn.max(0.0) + vt * (1.0 - friction);
-            pushed += 1;
+            // Friction once per vertex and sub-step, whatever the number of rounds.
+            let keep = if touched { 1.0 } else { 1.0 - friction };
+            v[i] = vb + nrm * vn.max(0.0) + vt * keep;
+            touched = true;
         }
+        pushed += touched as usize;
         if let Some((q, nrm)) =
             crate::solver::body::push_out(shapes.colliders, &shapes.pose, &p, margin)
         {
