@@ -26,6 +26,8 @@ pub struct LogThread {
     pub notes: Receiver<(MessageLevel, String)>,
     /// A live viewer: flush with a timeout at the end.
     pub live: bool,
+    /// The Style panel's key strands to draw (`run --web`).
+    pub style_marks: Option<Receiver<crate::style::edit::Marks>>,
 }
 
 impl LogThread {
@@ -34,6 +36,7 @@ impl LogThread {
         let mut setup = self.setup;
         let mut logger = Logger::new(self.rec.clone(), &setup)?;
         let mut notes = self.notes;
+        let mut marks = self.style_marks.unwrap_or_else(crossbeam_channel::never);
         loop {
             crossbeam_channel::select! {
                 recv(self.frames) -> f => match f {
@@ -55,6 +58,10 @@ impl LogThread {
                     Ok((level, text)) => logger.log_message(level, &text)?,
                     // Closed: stop selecting on it (a closed channel is always ready).
                     Err(_) => notes = crossbeam_channel::never(),
+                },
+                recv(marks) -> m => match m {
+                    Ok(m) => logger.log_style_marks(&m)?,
+                    Err(_) => marks = crossbeam_channel::never(),
                 },
             }
         }
