@@ -71,8 +71,8 @@ impl StyleEditor {
     ) -> Result<StyleEditor, String> {
         if !matches!(loaded.style.hair, Hair::Generated(_)) {
             return Err(format!(
-                "{}: this style's strands are imported, not generated from key strands, so \
-                 they cannot be edited here",
+                "{}: this style's strands are imported or given point by point, not generated \
+                 from key strands, so they cannot be edited here",
                 loaded.path.display()
             ));
         }
