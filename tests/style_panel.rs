@@ -370,6 +370,27 @@ fn save_writes_the_edited_model_keeps_the_comments_and_the_previous_text_as_bak(
         run.state()["log"]
     );
 
+    // An edit made to the file in an editor becomes the panel's style (one undoable step).
+    let steps = style(&run)["undo_steps"].as_u64().unwrap();
+    let edited = std::fs::read_to_string(&file).unwrap().replacen(
+        "tip_spread: 0.006",
+        "tip_spread: 0.009",
+        1,
+    );
+    std::fs::write(&file, &edited).unwrap();
+    let want = inspected_hash(&file);
+    let start = Instant::now();
+    while style(&run)["model_hash"].as_str() != Some(want.as_str()) {
+        assert!(
+            start.elapsed() < Duration::from_secs(20),
+            "the panel did not take the file"
+        );
+        std::thread::sleep(Duration::from_millis(50));
+    }
+    let s = style(&run);
+    assert_eq!(s["undo_steps"].as_u64(), Some(steps + 1));
+    assert_eq!(s["unsaved"], false);
+
     // Saving as a new file: never over an existing one.
     let r = edit(
         &run,

@@ -497,6 +497,19 @@ fn the_style_panel_selects_a_wisp_nudges_a_point_and_reports_the_restart() {
     d.click("#s-undo");
     d.wait_text("#style-status", "undone", |t| t.contains("undone"));
     assert_eq!(style(run.port)["model_hash"].as_str(), Some(hash0.as_str()));
+
+    // A key strand clicked in the 3D view selects its wisp: the page's handler of the viewer's
+    // selection events, called as the viewer calls it (the strands are drawn in list order).
+    d.script(
+        "onViewerEvent({type: 'selection_change', items: [{type: 'entity', \
+         entity_path: '/style/key_strands', instance_id: 3}]}); return 0",
+        json!([]),
+    );
+    let start = Instant::now();
+    while style(run.port)["selected"] != "side_left" {
+        assert!(start.elapsed() < Duration::from_secs(20), "not selected");
+        std::thread::sleep(Duration::from_millis(50));
+    }
     drop(d);
     if std::env::var_os("WISPTREE_DOCS_SHOT").is_some() {
         style_docs_shot(&run);

@@ -221,13 +221,14 @@ fn start_page(
         styles_tx,
         marks_tx,
     );
+    let style = Arc::new(style);
     let page = ControlPage::start(
         PageConfig {
             bind: w.bind,
             port: w.port,
             viewer_port: viewer.viewer_port,
             grpc_port: viewer.grpc_port,
-            style: Some(Arc::new(style)),
+            style: Some(Arc::clone(&style)),
         },
         Arc::clone(&shared),
         tx,
@@ -257,6 +258,7 @@ fn start_page(
             tunes: tunes_rx,
             styles: styles_rx,
             marks: marks_rx,
+            panel: Some(style),
         },
     ))
 }

@@ -78,6 +78,8 @@ pub struct WebLink {
     pub styles: Receiver<StyleApplied>,
     /// The Style panel's key strands to draw (read by the logging thread).
     pub marks: Receiver<crate::style::edit::Marks>,
+    /// The Style panel, told when the watched style file is reloaded.
+    pub panel: Option<Arc<crate::web::style_panel::StylePanel>>,
 }
 
 /// The two worker threads and the channels the main thread keeps.
@@ -352,10 +354,14 @@ fn watch_run(
         } else {
             std::thread::sleep(POLL);
         }
-        if watcher.as_mut().is_some_and(|w| w.poll())
-            && handle_reload(&mut current, &mut file_style, &w.ctl, &w.notes, console)
-        {
-            summary.reloads += 1;
+        if watcher.as_mut().is_some_and(|w| w.poll()) {
+            if handle_reload(&mut current, &mut file_style, &w.ctl, &w.notes, console) {
+                summary.reloads += 1;
+            }
+            // The Style panel edits what the file now says.
+            if let Some(panel) = opts.web.as_ref().and_then(|w| w.panel.as_ref()) {
+                panel.file_changed(&file_style);
+            }
         }
         if let Some(web) = &opts.web {
             while let Ok(cmd) = web.commands.try_recv() {

@@ -19,7 +19,7 @@ pub const SELECTED: &str = "/style/selected";
 const SELECTED_POINTS: &str = "/style/selected/points";
 const SELECTED_FRAMES: &str = "/style/selected/frames";
 /// Length of the drawn local-frame axes, m.
-const AXIS: f32 = 0.015;
+const AXIS: f32 = 0.025;
 
 impl Logger {
     /// Draws the key strands as the Style panel has them now (static: they stand until the
@@ -29,8 +29,8 @@ impl Logger {
         rec.log_static(
             KEY_STRANDS,
             &LineStrips3D::new(m.key_strands.iter().cloned())
-                .with_colors([Color::from_unmultiplied_rgba(200, 200, 255, 160)])
-                .with_radii([0.0012]),
+                .with_colors([Color::from_rgb(150, 230, 255)])
+                .with_radii([0.0015]),
         )?;
         match &m.selected {
             Some(s) => {
@@ -38,14 +38,14 @@ impl Logger {
                     SELECTED,
                     &LineStrips3D::new([s.curve.clone()])
                         .with_colors([Color::from_rgb(255, 40, 220)])
-                        .with_radii([0.003])
+                        .with_radii([0.004])
                         .with_labels([format!("key strand of {}", s.name)]),
                 )?;
                 rec.log_static(
                     SELECTED_POINTS,
                     &Points3D::new(s.points.iter().copied())
-                        .with_colors([Color::from_rgb(60, 140, 255)])
-                        .with_radii([0.004]),
+                        .with_colors([Color::from_rgb(255, 255, 255)])
+                        .with_radii([0.006]),
                 )?;
                 // Tangent red, normal green, perpendicular blue, as the page's axes.
                 let mut origins = Vec::new();

@@ -292,6 +292,52 @@ impl StyleEditor {
         }
     }
 
+    /// The style file changed on disk and the run reloaded it (`loaded`): an edit made in an
+    /// editor becomes the panel's style too (one undoable step), so that the next edit on the
+    /// page does not silently undo it. Saving from the page reloads the same style: then only
+    /// the text is taken. True if the style changed.
+    pub fn take_file(&mut self, loaded: LoadedStyle) -> bool {
+        let Some(text) = self
+            .file
+            .as_ref()
+            .and_then(|f| std::fs::read_to_string(f).ok())
+        else {
+            return false;
+        };
+        if !matches!(loaded.style.hair, Hair::Generated(_)) {
+            return false;
+        }
+        if loaded.style == self.loaded.style {
+            self.text = text;
+            self.saved = loaded.style;
+            self.keeps_comments = self.patched_text().is_some();
+            return false;
+        }
+        let Ok(model) = self.build(&loaded.style) else {
+            return false;
+        };
+        let old = std::mem::replace(&mut self.loaded, loaded);
+        self.undo.push_back(Snapshot {
+            style: old.style,
+            selected: self.selected.clone(),
+        });
+        while self.undo.len() > UNDO_STEPS {
+            self.undo.pop_front();
+        }
+        self.redo.clear();
+        self.text = text;
+        self.saved = self.loaded.style.clone();
+        if self
+            .selected
+            .as_deref()
+            .is_some_and(|n| wisps::entry(self.generated(), n).is_err())
+        {
+            self.selected = None;
+        }
+        self.took(&model);
+        true
+    }
+
     /// What the logger draws: every key strand, and the selected one with its control points
     /// and local frames.
     pub fn marks(&self) -> Marks {

@@ -165,6 +165,15 @@ impl StylePanel {
         }
     }
 
+    /// The watched style file was reloaded by the run (see [`StyleEditor::take_file`]).
+    pub fn file_changed(&self, loaded: &LoadedStyle) {
+        if let Ok(e) = self.lock().as_mut() {
+            if e.take_file(loaded.clone()) {
+                let _ = self.marks.send(e.marks());
+            }
+        }
+    }
+
     /// Parses, checks and applies one request body. The error is the message the page shows
     /// (the style is then unchanged).
     pub fn handle(&self, body: &str) -> Result<StyleReply, String> {
@@ -216,6 +225,12 @@ impl StylePanel {
             }
         }
         Ok(reply(editor, applied.message, restart))
+    }
+}
+
+impl std::fmt::Debug for StylePanel {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("StylePanel").finish_non_exhaustive()
     }
 }
 

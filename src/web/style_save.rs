@@ -366,3 +366,103 @@ fn write_via_temp(target: &Path, text: &str) -> Result<(), String> {
             format!("not saved: writing {}: {e}", target.display())
         })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::style::builtin::{StyleSource, BUILTIN_STYLES};
+    use crate::style::edit::Edit;
+
+    fn editor(text: &str, file: Option<PathBuf>) -> StyleEditor {
+        let loaded = crate::scene::parse_style(Path::new("test.ron"), text).unwrap();
+        let model = crate::model::HairModel::from_style(&loaded).unwrap();
+        StyleEditor::new(loaded, &model, text.to_owned(), file).unwrap()
+    }
+
+    fn first_wisp(e: &StyleEditor) -> String {
+        match &e.loaded.style.hair {
+            Hair::Generated(g) => g.wisps[0].name.clone(),
+            _ => unreachable!(),
+        }
+    }
+
+    #[test]
+    fn edits_of_every_built_in_style_keep_its_comments_and_load_back_exactly() {
+        for b in BUILTIN_STYLES {
+            let (loaded, _) = crate::scene::load_model(&StyleSource::Builtin(b.name)).unwrap();
+            let mut e = editor(b.text, None);
+            assert_eq!(e.loaded.style, loaded.style);
+            let w = first_wisp(&e);
+            e.apply(Edit::Move {
+                wisp: w.clone(),
+                point: 1,
+                delta: [0.0, 0.003, 0.001],
+            })
+            .unwrap();
+            e.apply(Edit::Mirror(w)).unwrap();
+            e.apply(Edit::Create {
+                azimuth: 180.0,
+                elevation: 20.0,
+            })
+            .unwrap();
+            let text = e.patched_text().unwrap_or_else(|| panic!("{}", b.name));
+            for c in b.text.lines().filter(|l| l.trim_start().starts_with("//")) {
+                assert!(text.contains(c), "{}: lost {c:?}", b.name);
+            }
+            // The whole style written afresh loads back too (saving without comments).
+            let full = e.full_text().unwrap();
+            let back = crate::scene::parse_style(Path::new("x.ron"), &full).unwrap();
+            assert_eq!(back.style, e.loaded.style, "{}", b.name);
+        }
+    }
+
+    #[test]
+    fn a_text_that_cannot_be_patched_saves_only_when_dropping_its_comments_is_agreed() {
+        let short = BUILTIN_STYLES[0].text;
+        // Struct names before the wisps: valid RON, but not the layout the patch reads.
+        let text = short.replace(
+            "        (\n            name:",
+            "        Wisp(\n            name:",
+        );
+        assert_ne!(text, short);
+        let dir = tempfile::tempdir().unwrap();
+        let file = dir.path().join("named.ron");
+        std::fs::write(&file, &text).unwrap();
+        let mut e = editor(&text, Some(file.clone()));
+        let w = first_wisp(&e);
+        e.apply(Edit::Shape {
+            wisp: w,
+            radius: None,
+            density: None,
+            tip_spread: Some(0.02),
+        })
+        .unwrap();
+        assert!(!e.view().save_keeps_comments);
+        let refused = e.save(None, false).unwrap_err();
+        assert!(
+            refused.contains("Saving drops the file's comments"),
+            "{refused}"
+        );
+        assert_eq!(
+            std::fs::read_to_string(&file).unwrap(),
+            text,
+            "nothing written"
+        );
+        let msg = e.save(None, true).unwrap();
+        assert!(msg.contains("comments were dropped"), "{msg}");
+        let back = crate::scene::load_style(&file).unwrap();
+        assert_eq!(back.style, e.loaded.style);
+        assert_eq!(
+            std::fs::read_to_string(dir.path().join("named.ron.bak")).unwrap(),
+            text
+        );
+        // A backup wisptree did not write is never replaced.
+        let mut other = editor(&text, Some(file.clone()));
+        let dropped = std::fs::read_to_string(&file).unwrap();
+        assert!(other.apply(Edit::Undo).is_err());
+        other.apply(Edit::Delete("back_upper".into())).unwrap();
+        let e2 = other.save(None, true).unwrap_err();
+        assert!(e2.contains("did not write it"), "{e2}");
+        assert_eq!(std::fs::read_to_string(&file).unwrap(), dropped);
+    }
+}
