@@ -37,6 +37,8 @@ impl LogThread {
         let mut logger = Logger::new(self.rec.clone(), &setup)?;
         let mut notes = self.notes;
         let mut marks = self.style_marks.unwrap_or_else(crossbeam_channel::never);
+        // The Style panel's marks drawn last, drawn again by a new logger.
+        let mut last_marks: Option<crate::style::edit::Marks> = None;
         loop {
             crossbeam_channel::select! {
                 recv(self.frames) -> f => match f {
@@ -46,6 +48,9 @@ impl LogThread {
                             // annotation classes and per-level series.
                             setup.levels = frame.levels;
                             logger = Logger::new(self.rec.clone(), &setup)?;
+                            if let Some(m) = &last_marks {
+                                logger.log_style_marks(m)?;
+                            }
                         }
                         logger.log_frame(&frame)?;
                         logged.fetch_add(1, Ordering::Relaxed);
@@ -60,7 +65,10 @@ impl LogThread {
                     Err(_) => notes = crossbeam_channel::never(),
                 },
                 recv(marks) -> m => match m {
-                    Ok(m) => logger.log_style_marks(&m)?,
+                    Ok(m) => {
+                        logger.log_style_marks(&m)?;
+                        last_marks = Some(m);
+                    }
                     Err(_) => marks = crossbeam_channel::never(),
                 },
             }
