@@ -510,6 +510,52 @@ fn the_style_panel_selects_a_wisp_nudges_a_point_and_reports_the_restart() {
         assert!(start.elapsed() < Duration::from_secs(20), "not selected");
         std::thread::sleep(Duration::from_millis(50));
     }
+    d.wait_text("#wisp-detail", "the clicked wisp shown", |t| {
+        t.contains("45 to 135")
+    });
+
+    // Dragging the "sideways" slider with the pointer moves the point sideways.
+    let slider = d.element("input.drag[data-axis=\"2\"]");
+    d.call(
+        "POST",
+        "/actions",
+        Some(json!({"actions": [{"type": "pointer", "id": "mouse",
+            "parameters": {"pointerType": "mouse"}, "actions": [
+            {"type": "pointerMove", "duration": 0, "x": 0, "y": 0,
+             "origin": {"element-6066-11e4-a52e-4f735466cecf": slider}},
+            {"type": "pointerDown", "button": 0},
+            {"type": "pointerMove", "duration": 200, "origin": "pointer", "x": 30, "y": 0},
+            {"type": "pointerUp", "button": 0}]}]})),
+    );
+    let dragged = d.wait_text("#style-status", "the drag's restart", |t| {
+        t.contains("of `side_left`") && t.contains("restarted from rest")
+    });
+    assert!(
+        dragged.contains("(+0.0, +0.0, +"),
+        "moved sideways: {dragged}"
+    );
+    let hash2 = style(run.port)["model_hash"].as_str().unwrap().to_owned();
+    assert_ne!(hash2, hash0);
+
+    // A second page shows the same panel: the selected wisp and the edited model.
+    let second = d.call("POST", "/window/new", Some(json!({"type": "tab"})));
+    let handle = second["handle"].as_str().unwrap().to_owned();
+    d.call("POST", "/window", Some(json!({"handle": handle})));
+    d.call(
+        "POST",
+        "/url",
+        Some(json!({"url": format!("{}?viewer=0", run.url())})),
+    );
+    d.wait_text("#style-info", "the second page agrees", |t| {
+        t.contains(&hash2)
+    });
+    assert_eq!(
+        d.script(
+            "return document.getElementById('wisp-list').value",
+            json!([])
+        ),
+        "side_left"
+    );
     drop(d);
     if std::env::var_os("WISPTREE_DOCS_SHOT").is_some() {
         style_docs_shot(&run);
