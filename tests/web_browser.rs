@@ -3,7 +3,9 @@
 //! threshold slider with the pointer and checks that the simulation takes the value, that an
 //! out-of-range value typed in is refused on the page, that a second tab shows the change, and
 //! it takes a screenshot of the page at 1280×800 (`target/tmp/web_page.png`). With
-//! `WISPTREE_DOCS_SHOT=1` it also writes README's `docs/web.png`, the page with the viewer.
+//! `WISPTREE_DOCS_SHOT=1` it also writes README's `docs/web.png`, the page with the viewer. The
+//! Style panel: a wisp selected, a point nudged and dragged, the restart on the state line, a
+//! second tab in agreement (`target/tmp/style_panel.png`; README's `docs/style_panel.png`).
 
 mod web_common;
 
