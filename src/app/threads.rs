@@ -354,13 +354,20 @@ fn watch_run(
         } else {
             std::thread::sleep(POLL);
         }
-        if watcher.as_mut().is_some_and(|w| w.poll()) {
-            if handle_reload(&mut current, &mut file_style, &w.ctl, &w.notes, console) {
-                summary.reloads += 1;
-            }
-            // The Style panel edits what the file now says.
-            if let Some(panel) = opts.web.as_ref().and_then(|w| w.panel.as_ref()) {
-                panel.file_changed(&file_style);
+        if let Some(path) = watcher
+            .as_mut()
+            .and_then(|w| w.poll().then(|| w.path().to_path_buf()))
+        {
+            let panel = opts.web.as_ref().and_then(|w| w.panel.as_ref());
+            // The Style panel's own save: the run already has its edits (they came first).
+            if !panel.is_some_and(|p| p.holds_own_text(&path)) {
+                if handle_reload(&mut current, &mut file_style, &w.ctl, &w.notes, console) {
+                    summary.reloads += 1;
+                }
+                // The Style panel edits what the file now says.
+                if let Some(panel) = panel {
+                    panel.file_changed(&path, &file_style);
+                }
             }
         }
         if let Some(web) = &opts.web {

@@ -296,12 +296,11 @@ impl StyleEditor {
     /// editor becomes the panel's style too (one undoable step), so that the next edit on the
     /// page does not silently undo it. Saving from the page reloads the same style: then only
     /// the text is taken. True if the style changed.
-    pub fn take_file(&mut self, loaded: LoadedStyle) -> bool {
-        let Some(text) = self
-            .file
-            .as_ref()
-            .and_then(|f| std::fs::read_to_string(f).ok())
-        else {
+    pub fn take_file(&mut self, path: &std::path::Path, loaded: LoadedStyle) -> bool {
+        if self.file.as_deref() != Some(path) {
+            return false;
+        }
+        let Ok(text) = std::fs::read_to_string(path) else {
             return false;
         };
         if !matches!(loaded.style.hair, Hair::Generated(_)) {
@@ -336,6 +335,15 @@ impl StyleEditor {
         }
         self.took(&model);
         true
+    }
+
+    /// Whether `path` is the file this editor saves to and holds the text it last read or
+    /// wrote: then a change the run's watcher sees there is the page's own save, which the
+    /// run already has (its edits went ahead of it), and must not be reloaded (a reload of an
+    /// older save could undo an edit made since).
+    pub fn holds_own_text(&self, path: &std::path::Path) -> bool {
+        self.file.as_deref() == Some(path)
+            && std::fs::read_to_string(path).is_ok_and(|t| t == self.text)
     }
 
     /// What the logger draws: every key strand, and the selected one with its control points

@@ -165,13 +165,21 @@ impl StylePanel {
         }
     }
 
-    /// The watched style file was reloaded by the run (see [`StyleEditor::take_file`]).
-    pub fn file_changed(&self, loaded: &LoadedStyle) {
+    /// The watched style file `path` was reloaded by the run (see
+    /// [`StyleEditor::take_file`]).
+    pub fn file_changed(&self, path: &std::path::Path, loaded: &LoadedStyle) {
         if let Ok(e) = self.lock().as_mut() {
-            if e.take_file(loaded.clone()) {
+            if e.take_file(path, loaded.clone()) {
                 let _ = self.marks.send(e.marks());
             }
         }
+    }
+
+    /// Whether the watched file `path` holds what the page last saved there (see
+    /// [`StyleEditor::holds_own_text`]; checked under the editor's lock, so no save comes in
+    /// between).
+    pub fn holds_own_text(&self, path: &std::path::Path) -> bool {
+        self.lock().as_ref().is_ok_and(|e| e.holds_own_text(path))
     }
 
     /// Parses, checks and applies one request body. The error is the message the page shows
