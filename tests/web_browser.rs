@@ -3,7 +3,9 @@
 //! threshold slider with the pointer and checks that the simulation takes the value, that an
 //! out-of-range value typed in is refused on the page, that a second tab shows the change, and
 //! it takes a screenshot of the page at 1280×800 (`target/tmp/web_page.png`). With
-//! `WISPTREE_DOCS_SHOT=1` it also writes README's `docs/web.png`, the page with the viewer.
+//! `WISPTREE_DOCS_SHOT=1` it also writes README's `docs/web.png`, the page with the viewer. The
+//! Style panel: a wisp selected, a point nudged and dragged, the restart on the state line, a
+//! second tab in agreement (`target/tmp/style_panel.png`; README's `docs/style_panel.png`).
 
 mod web_common;
 
@@ -419,4 +421,170 @@ fn the_page_shows_the_running_models_own_sliders_and_rebuilds_them_on_a_switch()
             .as_f64()
             .is_some_and(|v| (v - 1000.0).abs() < 50.0)
     });
+}
+
+/// The Style panel in the browser (issue 27 §1): select a wisp from the list, nudge its key
+/// strand's control point away from the scalp with the "+" button, and the panel's state line
+/// reports the restart once the simulation has made it; the model's hash changed and Undo on
+/// the page restores it. A screenshot goes to `target/tmp/style_panel.png` (with
+/// `WISPTREE_DOCS_SHOT=1`, README's `docs/style_panel.png`, with the viewer).
+#[test]
+fn the_style_panel_selects_a_wisp_nudges_a_point_and_reports_the_restart() {
+    let run = WebRun::start(&[]);
+    run.wait_state("first published state", |s| s["version"].as_u64() > Some(0));
+    let style = |port: u16| -> Value {
+        serde_json::from_str(&http(port, "GET", "/api/style", &[], "").body).unwrap()
+    };
+    let hash0 = style(run.port)["model_hash"].as_str().unwrap().to_owned();
+    let d = Driver::start();
+    d.call(
+        "POST",
+        "/url",
+        Some(json!({"url": format!("{}?viewer=0", run.url())})),
+    );
+    d.wait_text("#style-info", "the panel shows the style", |t| {
+        t.contains("wisps") && t.contains(&hash0)
+    });
+    // The controls are labelled in the page's own HTML, in words a user reads.
+    let panel = d.text("#stylebox");
+    for label in [
+        "key strand",
+        "Mirror",
+        "Copy",
+        "Paste",
+        "Delete",
+        "Undo",
+        "Redo",
+        "Save",
+    ] {
+        assert!(panel.contains(label), "no `{label}` on the panel: {panel}");
+    }
+
+    d.click("#wisp-list option[value=\"fringe_left\"]");
+    d.wait_text("#wisp-detail", "the wisp's control points", |t| {
+        t.contains("region") && t.contains("the root, on the scalp")
+    });
+    assert_eq!(style(run.port)["selected"], "fringe_left");
+    d.click("button.nudge[data-axis=\"1\"][data-sign=\"1\"]");
+    let line = d.wait_text("#style-status", "the state line reports the restart", |t| {
+        t.contains("restarted from rest")
+    });
+    assert!(line.contains("moved point 4 of `fringe_left`"), "{line}");
+    let moved = style(run.port);
+    assert_ne!(moved["model_hash"].as_str(), Some(hash0.as_str()));
+    let w = moved["wisps"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|w| w["name"] == "fringe_left")
+        .unwrap()
+        .clone();
+    assert!(
+        (w["key_strand"][3][1].as_f64().unwrap() - (-0.0364)).abs() > 1e-3,
+        "point 4 moved off its file value: {w}"
+    );
+    d.wait_text("#style-info", "the new hash on the page", |t| {
+        t.contains(moved["model_hash"].as_str().unwrap())
+    });
+
+    let png = d.call("GET", "/screenshot", None);
+    let bytes = base64::engine::general_purpose::STANDARD
+        .decode(png.as_str().unwrap())
+        .unwrap();
+    let target = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("style_panel.png");
+    std::fs::write(&target, &bytes).unwrap();
+    let img = image::load_from_memory(&bytes).unwrap().to_rgb8();
+    assert_eq!((img.width(), img.height()), (1280, 800));
+
+    d.click("#s-undo");
+    d.wait_text("#style-status", "undone", |t| t.contains("undone"));
+    assert_eq!(style(run.port)["model_hash"].as_str(), Some(hash0.as_str()));
+
+    // A key strand clicked in the 3D view selects its wisp: the page's handler of the viewer's
+    // selection events, called as the viewer calls it (the strands are drawn in list order).
+    d.script(
+        "onViewerEvent({type: 'selection_change', items: [{type: 'entity', \
+         entity_path: '/style/key_strands', instance_id: 3}]}); return 0",
+        json!([]),
+    );
+    let start = Instant::now();
+    while style(run.port)["selected"] != "side_left" {
+        assert!(start.elapsed() < Duration::from_secs(20), "not selected");
+        std::thread::sleep(Duration::from_millis(50));
+    }
+    d.wait_text("#wisp-detail", "the clicked wisp shown", |t| {
+        t.contains("45 to 135")
+    });
+
+    // Dragging the "sideways" slider with the pointer moves the point sideways.
+    let slider = d.element("input.drag[data-axis=\"2\"]");
+    d.call(
+        "POST",
+        "/actions",
+        Some(json!({"actions": [{"type": "pointer", "id": "mouse",
+            "parameters": {"pointerType": "mouse"}, "actions": [
+            {"type": "pointerMove", "duration": 0, "x": 0, "y": 0,
+             "origin": {"element-6066-11e4-a52e-4f735466cecf": slider}},
+            {"type": "pointerDown", "button": 0},
+            {"type": "pointerMove", "duration": 200, "origin": "pointer", "x": 30, "y": 0},
+            {"type": "pointerUp", "button": 0}]}]})),
+    );
+    let dragged = d.wait_text("#style-status", "the drag's restart", |t| {
+        t.contains("of `side_left`") && t.contains("restarted from rest")
+    });
+    assert!(
+        dragged.contains("(+0.0, +0.0, +"),
+        "moved sideways: {dragged}"
+    );
+    let hash2 = style(run.port)["model_hash"].as_str().unwrap().to_owned();
+    assert_ne!(hash2, hash0);
+
+    // A second page shows the same panel: the selected wisp and the edited model.
+    let second = d.call("POST", "/window/new", Some(json!({"type": "tab"})));
+    let handle = second["handle"].as_str().unwrap().to_owned();
+    d.call("POST", "/window", Some(json!({"handle": handle})));
+    d.call(
+        "POST",
+        "/url",
+        Some(json!({"url": format!("{}?viewer=0", run.url())})),
+    );
+    d.wait_text("#style-info", "the second page agrees", |t| {
+        t.contains(&hash2)
+    });
+    assert_eq!(
+        d.script(
+            "return document.getElementById('wisp-list').value",
+            json!([])
+        ),
+        "side_left"
+    );
+    drop(d);
+    if std::env::var_os("WISPTREE_DOCS_SHOT").is_some() {
+        style_docs_shot(&run);
+    }
+}
+
+/// README's picture of the Style panel: a wisp selected (its key strand highlighted in the
+/// viewer with its control points and local frames), the run paused so that the viewer
+/// (rendering in software here) settles.
+fn style_docs_shot(run: &WebRun) {
+    let origin = format!("http://127.0.0.1:{}", run.port);
+    let r = http(
+        run.port,
+        "POST",
+        "/api/style",
+        &[("Origin", &origin), ("Content-Type", "application/json")],
+        r#"{"type":"select","wisp":"side_left"}"#,
+    );
+    assert_eq!(r.status, 200, "{}", r.body);
+    assert_eq!(run.control(r#"{"type":"pause","paused":true}"#).status, 200);
+    let d = Driver::start();
+    d.call("POST", "/url", Some(json!({"url": run.url()})));
+    std::thread::sleep(Duration::from_secs(60));
+    let png = d.call("GET", "/screenshot", None);
+    let bytes = base64::engine::general_purpose::STANDARD
+        .decode(png.as_str().unwrap())
+        .unwrap();
+    let docs = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("docs/style_panel.png");
+    std::fs::write(docs, &bytes).unwrap();
 }

@@ -26,6 +26,8 @@ pub struct LogThread {
     pub notes: Receiver<(MessageLevel, String)>,
     /// A live viewer: flush with a timeout at the end.
     pub live: bool,
+    /// The Style panel's key strands to draw (`run --web`).
+    pub style_marks: Option<Receiver<crate::style::edit::Marks>>,
 }
 
 impl LogThread {
@@ -34,6 +36,9 @@ impl LogThread {
         let mut setup = self.setup;
         let mut logger = Logger::new(self.rec.clone(), &setup)?;
         let mut notes = self.notes;
+        let mut marks = self.style_marks.unwrap_or_else(crossbeam_channel::never);
+        // The Style panel's marks drawn last, drawn again by a new logger.
+        let mut last_marks: Option<crate::style::edit::Marks> = None;
         loop {
             crossbeam_channel::select! {
                 recv(self.frames) -> f => match f {
@@ -43,6 +48,9 @@ impl LogThread {
                             // annotation classes and per-level series.
                             setup.levels = frame.levels;
                             logger = Logger::new(self.rec.clone(), &setup)?;
+                            if let Some(m) = &last_marks {
+                                logger.log_style_marks(m)?;
+                            }
                         }
                         logger.log_frame(&frame)?;
                         logged.fetch_add(1, Ordering::Relaxed);
@@ -55,6 +63,13 @@ impl LogThread {
                     Ok((level, text)) => logger.log_message(level, &text)?,
                     // Closed: stop selecting on it (a closed channel is always ready).
                     Err(_) => notes = crossbeam_channel::never(),
+                },
+                recv(marks) -> m => match m {
+                    Ok(m) => {
+                        logger.log_style_marks(&m)?;
+                        last_marks = Some(m);
+                    }
+                    Err(_) => marks = crossbeam_channel::never(),
                 },
             }
         }

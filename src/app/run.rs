@@ -205,12 +205,31 @@ fn start_page(
     let shared = Arc::new(SharedState::new(models, motions));
     let (tx, rx) = crossbeam_channel::unbounded();
     let (tunes_tx, tunes_rx) = crossbeam_channel::unbounded();
+    let (styles_tx, styles_rx) = crossbeam_channel::unbounded();
+    let (marks_tx, marks_rx) = crossbeam_channel::unbounded();
+    // The Style panel edits the style's own text (its comments are kept where possible).
+    let text = match &scene.source {
+        StyleSource::Builtin(name) => crate::style::builtin::builtin(name)
+            .map(|b| b.text.to_owned())
+            .unwrap_or_default(),
+        StyleSource::File(p) => std::fs::read_to_string(p).unwrap_or_default(),
+    };
+    let style = crate::web::style_panel::StylePanel::new(
+        scene.loaded.clone(),
+        &scene.model,
+        text,
+        scene.source.file().map(std::path::Path::to_path_buf),
+        styles_tx,
+        marks_tx,
+    );
+    let style = Arc::new(style);
     let page = ControlPage::start(
         PageConfig {
             bind: w.bind,
             port: w.port,
             viewer_port: viewer.viewer_port,
             grpc_port: viewer.grpc_port,
+            style: Some(Arc::clone(&style)),
         },
         Arc::clone(&shared),
         tx,
@@ -238,6 +257,9 @@ fn start_page(
             shared,
             commands: rx,
             tunes: tunes_rx,
+            styles: styles_rx,
+            marks: marks_rx,
+            panel: Some(style),
         },
     ))
 }

@@ -21,6 +21,7 @@ use crate::frame::Frame;
 use crate::scene::Scene;
 use crate::stream::sink::{OpenSink, SinkWatcher, ViewerStatus};
 use crate::stream::{LoggerSetup, MessageLevel};
+use crate::web::style_panel::StyleApplied;
 use crate::web::{SetTunable, SharedState, WebCommand};
 
 /// Frames queued between the simulation and the logger. Small: live, a long queue is latency.
@@ -72,6 +73,13 @@ pub struct WebLink {
     pub commands: Receiver<WebCommand>,
     /// The pages' tunable values, read by the simulation thread itself.
     pub tunes: Receiver<SetTunable>,
+    /// Styles edited on the Style panel, with their regenerated models: the run restarts on
+    /// them.
+    pub styles: Receiver<StyleApplied>,
+    /// The Style panel's key strands to draw (read by the logging thread).
+    pub marks: Receiver<crate::style::edit::Marks>,
+    /// The Style panel, told when the watched style file is reloaded.
+    pub panel: Option<Arc<crate::web::style_panel::StylePanel>>,
 }
 
 /// The two worker threads and the channels the main thread keeps.
@@ -237,6 +245,7 @@ fn start_workers(
         free: free_tx,
         notes: note_rx,
         live: opts.live,
+        style_marks: opts.web.as_ref().map(|w| w.marks.clone()),
     };
     let logger = {
         let logged = logged.clone();
@@ -345,14 +354,35 @@ fn watch_run(
         } else {
             std::thread::sleep(POLL);
         }
-        if watcher.as_mut().is_some_and(|w| w.poll())
-            && handle_reload(&mut current, &mut file_style, &w.ctl, &w.notes, console)
+        if let Some(path) = watcher
+            .as_mut()
+            .and_then(|w| w.poll().then(|| w.path().to_path_buf()))
         {
-            summary.reloads += 1;
+            let panel = opts.web.as_ref().and_then(|w| w.panel.as_ref());
+            // The Style panel's own save: the run already has its edits (they came first).
+            if !panel.is_some_and(|p| p.holds_own_text(&path)) {
+                if handle_reload(&mut current, &mut file_style, &w.ctl, &w.notes, console) {
+                    summary.reloads += 1;
+                }
+                // The Style panel edits what the file now says.
+                if let Some(panel) = panel {
+                    panel.file_changed(&path, &file_style);
+                }
+            }
         }
         if let Some(web) = &opts.web {
             while let Ok(cmd) = web.commands.try_recv() {
                 web_command(cmd, &mut current, &w.ctl, &web.shared, console);
+            }
+            while let Ok(edit) = web.styles.try_recv() {
+                style_edit(
+                    edit,
+                    &mut current,
+                    &mut file_style,
+                    &w.ctl,
+                    &web.shared,
+                    console,
+                );
             }
         }
         let lost = match viewer.status() {
@@ -381,6 +411,46 @@ fn watch_run(
         }
     }
     never_connected
+}
+
+/// A style edited on the Style panel: a new scene on its regenerated model, and a restart
+/// from rest on it with the tuned parameters kept (as a motion or model switch does). The
+/// watched file's style follows, so that saving the edit is not taken for another change.
+fn style_edit(
+    edit: StyleApplied,
+    current: &mut Scene,
+    file_style: &mut crate::style::LoadedStyle,
+    ctl: &Sender<Control>,
+    shared: &SharedState,
+    console: &Console,
+) {
+    let StyleApplied {
+        loaded,
+        model,
+        message,
+    } = edit;
+    match Scene::from_model(
+        current.source.clone(),
+        loaded.clone(),
+        model,
+        &current.motion_spec,
+        current.solver,
+    ) {
+        Ok(scene) => {
+            *current = scene;
+            *file_style = loaded;
+            let msg = format!(
+                "style (web page): {message}; the hair regenerated, restarting the simulation \
+                 from rest"
+            );
+            let _ = ctl.send(Control::Switch(Box::new(current.clone()), msg));
+        }
+        Err(e) => {
+            let msg = format!("style edit not applied: {e}");
+            console.say(&msg);
+            shared.log(&msg);
+        }
+    }
 }
 
 /// Turns a control page's request into what the simulation thread does: the same [`Control`]

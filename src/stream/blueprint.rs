@@ -33,8 +33,13 @@ struct ViewSpec {
     contents: Vec<String>,
 }
 
-pub(super) const SPATIAL_CONTENTS: &[&str] =
-    &["+ /hair/**", "+ /body/**", "+ /head/**", "+ /events/**"];
+pub(super) const SPATIAL_CONTENTS: &[&str] = &[
+    "+ /hair/**",
+    "+ /body/**",
+    "+ /head/**",
+    "+ /events/**",
+    "+ /style/**",
+];
 /// Time series are grouped by magnitude, so that no series flattens another: node counts
 /// (hundreds to thousands) with the adaptation events per frame, collision work (pairs tested
 /// run to 10⁵–10⁶) apart from them, the small real-valued quantities together, and the

@@ -17,6 +17,7 @@
 //! | `/inspect/<tree>/<level>/<index>/<name>` | `Scalars`: the inspected node's numbers |
 //! | `/hair/inspected` | `Ellipsoids3D`: a ring around the inspected node |
 //! | `/log` | `TextLog`: free-text messages |
+//! | `/style/key_strands`, `/style/selected` | `LineStrips3D` (static) of the Style panel's key strands, the selected one with `Points3D` and `Arrows3D` below it; `Transform3D` on `/style` per frame |
 //!
 //! Every entity holds all its instances (one row per frame), never one entity per node: the
 //! viewer slows down with thousands of entities.
@@ -28,6 +29,7 @@ mod inspected;
 pub mod paths;
 mod runs_layout;
 pub mod sink;
+mod style_marks;
 pub mod sweep_sink;
 
 pub use blueprint::{
@@ -188,6 +190,8 @@ pub struct Logger {
     event_positions: Vec<[f32; 3]>,
     /// Whether the inspected node's marker is drawn (cleared once, when inspecting stops).
     inspected_drawn: bool,
+    /// Whether the Style panel's key strands are drawn (they then follow the head).
+    style_drawn: bool,
     event_labels: Vec<String>,
     text: String,
     /// Whether the last frame logged markers of that kind (then an eventless frame clears them).
@@ -235,6 +239,7 @@ impl Logger {
             strands: Vec::new(),
             event_positions: Vec::new(),
             inspected_drawn: false,
+            style_drawn: false,
             event_labels: Vec::new(),
             text: String::new(),
             events_shown: [false; 4],
@@ -394,6 +399,7 @@ impl Logger {
                 .with_colors([Color::from_rgb(r, g, bl)])
                 .with_fill_mode(FillMode::Solid),
         )?;
+        self.log_style_pose(frame)?;
         self.shapes.log(&self.rec, b)
     }
 

@@ -6,6 +6,7 @@
 
 pub mod body;
 pub mod builtin;
+pub mod edit;
 pub mod generate;
 pub mod generated_section;
 pub mod guides_section;

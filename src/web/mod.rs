@@ -8,11 +8,15 @@
 //! running solver's table of tunables, which the simulation thread publishes with the values in
 //! force into a [`SharedState`] that every open page reads. A tunable's new value goes straight
 //! to the simulation thread on a channel of its own ([`SetTunable`]); the other requests
-//! (pause, restart, motion, model, inspect) are handed to the run as [`WebCommand`]s. No physics and no
-//! Rerun here.
+//! (pause, restart, motion, model, inspect) are handed to the run as [`WebCommand`]s. The Style
+//! panel ([`style_panel`]) edits `Generated` hair (Zhang & Wünsche 2007, §3) and hands the run
+//! the regenerated model. No physics and no Rerun here.
 
 pub mod protocol;
 pub mod server;
+pub mod style_editor;
+pub mod style_panel;
+pub mod style_save;
 
 pub use protocol::{Controls, LiveState, SetTunable, SharedState, WebCommand};
 pub use server::{ControlPage, PageConfig};

@@ -16,6 +16,7 @@ use crossbeam_channel::Sender;
 use tiny_http::{Header, Method, Request, Response, Server};
 
 use super::protocol::{self, SetTunable, SharedState, WebCommand};
+use super::style_panel::StylePanel;
 
 /// The largest request body taken (the page's requests are under 100 bytes).
 const MAX_BODY: usize = 4096;
@@ -25,7 +26,7 @@ const MAX_BODY: usize = 4096;
 const PAGE: &str = include_str!("page.html");
 
 /// Where the control page listens and what it embeds.
-#[derive(Debug, Clone)]
+#[derive(Clone)]
 pub struct PageConfig {
     /// The address to bind (127.0.0.1 unless the user asked otherwise).
     pub bind: IpAddr,
@@ -35,6 +36,8 @@ pub struct PageConfig {
     pub viewer_port: u16,
     /// The port of the gRPC server the viewer reads from.
     pub grpc_port: u16,
+    /// The Style panel's editor (`None`: no panel, as for a page without a style).
+    pub style: Option<Arc<StylePanel>>,
 }
 
 /// A running control page; stops when dropped.
@@ -66,6 +69,7 @@ impl ControlPage {
             hosts: allowed_hosts(cfg.bind, addr.port()),
             any_host: cfg.bind.is_unspecified(),
             page: page_html(&cfg),
+            style: cfg.style.clone(),
             viewer: re_web_viewer_server::WebViewerData::load(None)
                 .map_err(|e| anyhow::anyhow!("{e}"))
                 .context("the Rerun web viewer's files")?,
@@ -142,6 +146,7 @@ struct Serving {
     state: Arc<SharedState>,
     commands: Sender<WebCommand>,
     tunes: Sender<SetTunable>,
+    style: Option<Arc<StylePanel>>,
 }
 
 /// A reply: status, body and its type.
@@ -225,27 +230,44 @@ impl Serving {
                 Err(e) => Reply::error(500, e.to_string()),
             },
             (Method::Post, "/api/control") => self.control(req, &host),
-            (_, "/" | "/api/state" | "/api/control") => Reply::error(405, "method not allowed"),
+            (Method::Get, "/api/style") => match self.style.as_ref().map(|s| s.view()) {
+                Some(v) => match serde_json::to_value(v) {
+                    Ok(v) => Reply::json(200, v),
+                    Err(e) => Reply::error(500, e.to_string()),
+                },
+                None => Reply::error(404, "this run has no Style panel"),
+            },
+            (Method::Post, "/api/style") => self.style_edit(req, &host),
+            (_, "/" | "/api/state" | "/api/control" | "/api/style") => {
+                Reply::error(405, "method not allowed")
+            }
             _ => Reply::error(404, format!("no page `{path}`")),
         }
     }
 
-    /// The control endpoint: same origin, JSON, small, and one of the page's messages.
-    fn control(&self, req: &mut Request, host: &str) -> Reply {
+    /// The body of a control request: same origin, JSON and small, else the refusal (a body
+    /// over `MAX_BODY` gets `too_large`).
+    fn checked_body(req: &mut Request, host: &str, too_large: u16) -> Result<String, Reply> {
         let origin = header(req, "Origin").unwrap_or_default();
         if origin != format!("http://{host}") {
-            return Reply::error(
+            return Err(Reply::error(
                 403,
                 format!("refused: requests from other origins are not taken (Origin `{origin}`)"),
-            );
+            ));
         }
         let json = header(req, "Content-Type")
             .is_some_and(|c| c.to_ascii_lowercase().starts_with("application/json"));
         if !json {
-            return Reply::error(415, "refused: the body must be application/json");
+            return Err(Reply::error(
+                415,
+                "refused: the body must be application/json",
+            ));
         }
         if req.body_length().is_some_and(|n| n > MAX_BODY) {
-            return Reply::error(413, "refused: request too large");
+            return Err(Reply::error(
+                too_large,
+                format!("refused: request too large (at most {MAX_BODY} bytes)"),
+            ));
         }
         let mut body = String::new();
         let read = req
@@ -253,8 +275,37 @@ impl Serving {
             .take(MAX_BODY as u64 + 1)
             .read_to_string(&mut body);
         if read.is_err() || body.len() > MAX_BODY {
-            return Reply::error(400, "refused: unreadable or too large body");
+            return Err(Reply::error(400, "refused: unreadable or too large body"));
         }
+        Ok(body)
+    }
+
+    /// The Style panel's endpoint: the same checks as the control endpoint; a bad edit (or
+    /// a request too large) is a 400 and changes nothing.
+    fn style_edit(&self, req: &mut Request, host: &str) -> Reply {
+        let body = match Self::checked_body(req, host, 400) {
+            Ok(b) => b,
+            Err(r) => return r,
+        };
+        let Some(panel) = &self.style else {
+            return Reply::error(404, "this run has no Style panel");
+        };
+        match panel.handle(&body) {
+            Ok(r) => Reply::json(
+                200,
+                serde_json::json!({ "ok": true, "message": r.message, "restart": r.restart,
+                    "version": r.version, "model_hash": r.model_hash }),
+            ),
+            Err(msg) => Reply::error(400, msg),
+        }
+    }
+
+    /// The control endpoint: same origin, JSON, small, and one of the page's messages.
+    fn control(&self, req: &mut Request, host: &str) -> Reply {
+        let body = match Self::checked_body(req, host, 413) {
+            Ok(b) => b,
+            Err(r) => return r,
+        };
         let sent = match protocol::parse_request(&body, &self.state.snapshot()) {
             Ok(WebCommand::Set(name, value)) => self.tunes.send(SetTunable { name, value }).is_ok(),
             Ok(cmd) => self.commands.send(cmd).is_ok(),

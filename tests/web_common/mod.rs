@@ -20,13 +20,18 @@ pub struct WebRun {
 impl WebRun {
     /// Starts it with these extra arguments and waits for the page's URL.
     pub fn start(extra: &[&str]) -> WebRun {
+        WebRun::start_style("short", extra)
+    }
+
+    /// [`WebRun::start`] on another style (a built-in name or a file).
+    pub fn start_style(style: &str, extra: &[&str]) -> WebRun {
         let mut child = Command::new(env!("CARGO_BIN_EXE_wisptree"))
             .args([
                 "run",
                 "--web",
                 "--no-render",
                 "--style",
-                "short",
+                style,
                 "--motion",
                 "lean",
             ])

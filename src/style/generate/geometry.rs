@@ -166,7 +166,7 @@ pub(super) fn sample_roots(e: &Ellipsoid, t: &Tile, count: usize, rng: &mut Spli
 /// A centripetal Catmull-Rom spline through `p` (at least 2 distinct consecutive points),
 /// densely sampled. Centripetal parametrisation never forms cusps or self-intersections within
 /// a segment, which uniform Catmull-Rom can with unevenly spaced control points.
-pub(super) fn catmull_rom(p: &[V3]) -> Vec<V3> {
+pub fn catmull_rom(p: &[V3]) -> Vec<V3> {
     let m = p.len();
     // Phantom end points continue the first and last segment straight.
     let first = sub(scale(p[0], 2.0), p[1]);

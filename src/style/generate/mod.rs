@@ -20,7 +20,9 @@ mod geometry;
 pub mod wisp_study;
 
 use geometry::*;
-pub use geometry::{direction, implicit, scalp_normal, scalp_point, styling_frame, Frame};
+pub use geometry::{
+    catmull_rom, direction, implicit, scalp_normal, scalp_point, styling_frame, Frame,
+};
 
 type V3 = [f64; 3];
 type Invalid = (String, String);
