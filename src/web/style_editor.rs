@@ -131,7 +131,7 @@ impl StyleEditor {
         };
         let scalp = self.loaded.style.head.scalp();
         let (message, selected) = match edit {
-            Edit::Select(name) => {
+            Edit::Select { wisp: name } => {
                 if let Some(n) = &name {
                     wisps::entry(g, n)?;
                 }
@@ -146,7 +146,7 @@ impl StyleEditor {
                     model: None,
                 });
             }
-            Edit::Copy(name) => {
+            Edit::Copy { wisp: name } => {
                 let w = wisps::resolved(g, &name)?;
                 self.clipboard = Some(w);
                 self.version += 1;
@@ -155,8 +155,8 @@ impl StyleEditor {
                     model: None,
                 });
             }
-            Edit::Undo => return self.step_back(),
-            Edit::Redo => return self.step_forward(),
+            Edit::Undo {} => return self.step_back(),
+            Edit::Redo {} => return self.step_forward(),
             Edit::Move { wisp, point, delta } => {
                 let msg = wisps::move_point(g, &scalp, &wisp, point, delta)?;
                 (msg, Some(wisp))
@@ -177,11 +177,11 @@ impl StyleEditor {
                 let name = wisps::paste(g, &scalp, clip, azimuth, elevation)?;
                 (format!("pasted the wisp `{name}`"), Some(name))
             }
-            Edit::Delete(name) => {
+            Edit::Delete { wisp: name } => {
                 wisps::delete(g, &name)?;
                 (format!("deleted the wisp `{name}`"), None)
             }
-            Edit::Mirror(name) => {
+            Edit::Mirror { wisp: name } => {
                 let new = wisps::mirror(g, &name)?;
                 (
                     format!("mirrored `{name}` across the head's sagittal plane: `{new}`"),

@@ -13,91 +13,49 @@ use serde::Deserialize;
 use super::style_editor::{EditorView, StyleEditor};
 use crate::model::HairModel;
 use crate::style::edit::{Edit, Marks};
-use crate::style::{LoadedStyle, Vec3};
+use crate::style::LoadedStyle;
 
-/// A request of the Style panel (JSON, `type` names the kind). Anything else is refused.
-#[derive(Debug, Clone, Deserialize)]
-#[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
+/// A request of the Style panel (JSON, `type` names the kind): an [`Edit`], or Save.
+/// Anything else is refused.
+#[derive(Debug, Clone, PartialEq)]
 pub enum StyleRequest {
-    /// Select a wisp (its key strand is drawn highlighted), or none.
-    Select {
-        /// The wisp, or `null`.
-        wisp: Option<String>,
-    },
-    /// Move a control point along its local frame (tangent, normal, perpendicular), m.
-    Move {
-        /// The wisp.
-        wisp: String,
-        /// The control point (1 = the first after the root).
-        point: usize,
-        /// Metres along the three axes.
-        delta: Vec3,
-    },
-    /// Set a control point to an exact value in the wisp's styling frame, m.
-    SetPoint {
-        /// The wisp.
-        wisp: String,
-        /// The control point.
-        point: usize,
-        /// The value.
-        value: Vec3,
-    },
-    /// A new wisp from the template key strand at a scalp position (degrees).
-    Create {
-        /// Azimuth.
-        azimuth: f64,
-        /// Elevation.
-        elevation: f64,
-    },
-    /// Delete a wisp.
-    Delete {
-        /// The wisp.
-        wisp: String,
-    },
-    /// Copy a wisp.
-    Copy {
-        /// The wisp.
-        wisp: String,
-    },
-    /// Paste the copied wisp at a scalp position (degrees).
-    Paste {
-        /// Azimuth.
-        azimuth: f64,
-        /// Elevation.
-        elevation: f64,
-    },
-    /// A mirror image of a wisp on the other side of the head.
-    Mirror {
-        /// The wisp.
-        wisp: String,
-    },
-    /// Change a wisp's shape (any of the values).
-    Shape {
-        /// The wisp.
-        wisp: String,
-        /// Half-widths of its region, degrees (azimuth, elevation).
-        #[serde(default)]
-        radius: Option<[f64; 2]>,
-        /// Strands per cm².
-        #[serde(default)]
-        density: Option<f64>,
-        /// Tip spread, m (smooth ↔ fringy).
-        #[serde(default)]
-        tip_spread: Option<f64>,
-    },
-    /// Undo the last edit.
-    Undo {},
-    /// Redo.
-    Redo {},
+    /// An edit of the style.
+    Edit(Edit),
     /// Save the style: to its file, or to a new one.
-    Save {
-        /// A new file (must not exist); `null`: the style's own file.
-        #[serde(default)]
-        file: Option<String>,
-        /// The user agreed that saving drops the file's comments.
-        #[serde(default)]
-        drop_comments: bool,
-    },
+    Save(SaveRequest),
+}
+
+/// Save the style (`{"type":"save", …}`).
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SaveRequest {
+    /// A new file (must not exist); `null`: the style's own file.
+    #[serde(default)]
+    pub file: Option<String>,
+    /// The user agreed that saving drops the file's comments.
+    #[serde(default)]
+    pub drop_comments: bool,
+}
+
+impl StyleRequest {
+    /// Parses one request body; the error says why it is not one.
+    pub fn parse(body: &str) -> Result<StyleRequest, String> {
+        let bad = |e: serde_json::Error| format!("not a request the Style panel sends: {e}");
+        let mut value: serde_json::Value = serde_json::from_str(body).map_err(bad)?;
+        if value.get("type").and_then(|t| t.as_str()) == Some("save") {
+            // Save's own fields are the others (an object: `type` was found in it).
+            if let Some(fields) = value.as_object_mut() {
+                fields.remove("type");
+            }
+            serde_json::from_value(value)
+                .map(StyleRequest::Save)
+                .map_err(bad)
+        } else {
+            serde_json::from_value(value)
+                .map(StyleRequest::Edit)
+                .map_err(bad)
+        }
+    }
 }
 
 /// A regenerated model for the run to restart on.
@@ -185,39 +143,18 @@ impl StylePanel {
     /// Parses, checks and applies one request body. The error is the message the page shows
     /// (the style is then unchanged).
     pub fn handle(&self, body: &str) -> Result<StyleReply, String> {
-        let req: StyleRequest = serde_json::from_str(body)
-            .map_err(|e| format!("not a request the Style panel sends: {e}"))?;
+        let req = StyleRequest::parse(body)?;
         let mut guard = self.lock();
         let editor = guard.as_mut().map_err(|reason| reason.clone())?;
         let edit = match req {
-            StyleRequest::Save {
+            StyleRequest::Save(SaveRequest {
                 file,
                 drop_comments,
-            } => {
+            }) => {
                 let message = editor.save(file.as_deref(), drop_comments)?;
                 return Ok(reply(editor, message, false));
             }
-            StyleRequest::Select { wisp } => Edit::Select(wisp),
-            StyleRequest::Move { wisp, point, delta } => Edit::Move { wisp, point, delta },
-            StyleRequest::SetPoint { wisp, point, value } => Edit::SetPoint { wisp, point, value },
-            StyleRequest::Create { azimuth, elevation } => Edit::Create { azimuth, elevation },
-            StyleRequest::Delete { wisp } => Edit::Delete(wisp),
-            StyleRequest::Copy { wisp } => Edit::Copy(wisp),
-            StyleRequest::Paste { azimuth, elevation } => Edit::Paste { azimuth, elevation },
-            StyleRequest::Mirror { wisp } => Edit::Mirror(wisp),
-            StyleRequest::Shape {
-                wisp,
-                radius,
-                density,
-                tip_spread,
-            } => Edit::Shape {
-                wisp,
-                radius,
-                density,
-                tip_spread,
-            },
-            StyleRequest::Undo {} => Edit::Undo,
-            StyleRequest::Redo {} => Edit::Redo,
+            StyleRequest::Edit(edit) => edit,
         };
         let applied = editor.apply(edit)?;
         let _ = self.marks.send(editor.marks());
@@ -274,13 +211,13 @@ mod tests {
                 false,
             ),
             (r#"{"type":"undo","steps":5}"#, false),
+            (r#"{"type":"select","wisp":null}"#, true),
+            (r#"{"type":"mirror","wisp":"a"}"#, true),
+            (r#"{"type":"save","file":"x.ron","force":true}"#, false),
+            (r#"{"wisp":"a"}"#, false),
             (r#"{"type":"format_disk"}"#, false),
         ] {
-            assert_eq!(
-                serde_json::from_str::<StyleRequest>(body).is_ok(),
-                ok,
-                "{body}"
-            );
+            assert_eq!(StyleRequest::parse(body).is_ok(), ok, "{body}");
         }
     }
 }

@@ -399,7 +399,7 @@ mod tests {
                 delta: [0.0, 0.003, 0.001],
             })
             .unwrap();
-            e.apply(Edit::Mirror(w)).unwrap();
+            e.apply(Edit::Mirror { wisp: w }).unwrap();
             e.apply(Edit::Create {
                 azimuth: 180.0,
                 elevation: 20.0,
@@ -459,8 +459,12 @@ mod tests {
         // A backup wisptree did not write is never replaced.
         let mut other = editor(&text, Some(file.clone()));
         let dropped = std::fs::read_to_string(&file).unwrap();
-        assert!(other.apply(Edit::Undo).is_err());
-        other.apply(Edit::Delete("back_upper".into())).unwrap();
+        assert!(other.apply(Edit::Undo {}).is_err());
+        other
+            .apply(Edit::Delete {
+                wisp: "back_upper".into(),
+            })
+            .unwrap();
         let e2 = other.save(None, true).unwrap_err();
         assert!(e2.contains("did not write it"), "{e2}");
         assert_eq!(std::fs::read_to_string(&file).unwrap(), dropped);

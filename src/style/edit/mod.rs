@@ -14,12 +14,17 @@ use crate::style::Vec3;
 
 pub use wisps::{Marks, SelectedMarks, WispView};
 
-/// One edit, as the page asks for it. Wisps are named; control points are numbered from the
+/// One edit, as the page asks for it (the Style panel's JSON requests, `type` naming the
+/// kind; anything else is refused). Wisps are named; control points are numbered from the
 /// root (0, which is implicit and stays on the scalp) to the tip.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Deserialize)]
+#[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
 pub enum Edit {
-    /// Select a wisp (or copy), or none.
-    Select(Option<String>),
+    /// Select a wisp (or copy), or none (`null`): its key strand is drawn highlighted.
+    Select {
+        /// The wisp.
+        wisp: Option<String>,
+    },
     /// Move control point `point` of `wisp` by `delta` metres along its local frame: the
     /// curve's tangent, the scalp normal, their perpendicular (§3.1).
     Move {
@@ -49,9 +54,15 @@ pub enum Edit {
         elevation: f64,
     },
     /// Delete a wisp or copy.
-    Delete(String),
+    Delete {
+        /// The wisp.
+        wisp: String,
+    },
     /// Copy a wisp's key strand and shape to the clipboard.
-    Copy(String),
+    Copy {
+        /// The wisp.
+        wisp: String,
+    },
     /// A new wisp from the clipboard, its region centred here: the key strand is kept in its
     /// root's styling frame, so it keeps its shape relative to the new root (§3.2).
     Paste {
@@ -61,21 +72,27 @@ pub enum Edit {
         elevation: f64,
     },
     /// A new wisp, the mirror image of this one across the head's sagittal plane (Fig. 6).
-    Mirror(String),
-    /// Change a wisp's shape (§3.2): its size on the scalp, density and spread.
+    Mirror {
+        /// The wisp.
+        wisp: String,
+    },
+    /// Change a wisp's shape (§3.2): its size on the scalp, density and spread (any of them).
     Shape {
         /// The wisp.
         wisp: String,
         /// Half-widths of the region, degrees of (azimuth, elevation), about its centre.
+        #[serde(default)]
         radius: Option<[f64; 2]>,
         /// Strands per cm².
+        #[serde(default)]
         density: Option<f64>,
         /// Largest distance of a member's tip from the key strand, m: small is smooth, large
         /// is fringy.
+        #[serde(default)]
         tip_spread: Option<f64>,
     },
     /// Go back one edit.
-    Undo,
+    Undo {},
     /// Redo the edit undone last.
-    Redo,
+    Redo {},
 }
