@@ -292,6 +292,28 @@ fn every_node_name_resolves_back_to_its_node() {
     }
 }
 
+/// Inspects the node drawn as instance `c` of `nodes` (as a click on it names it), checks that
+/// its numbers name it (`names`: the tree's and the index's) and give its drawn position, and
+/// that a click on that exact position picks it too. Returns it, its numbers in `v`.
+fn inspect_drawn(
+    s: &dyn wisptree::solver::Solver,
+    nodes: &wisptree::frame::NodeBuf,
+    c: usize,
+    names: [&str; 2],
+    v: &mut Vec<(&'static str, f64)>,
+) -> NodeId {
+    let id = s.pick_node(Some(c), None).unwrap();
+    s.inspect(&id, v).unwrap();
+    assert_eq!(get(v, names[0]), id.tree as f64);
+    assert_eq!(get(v, names[1]), id.index as f64);
+    let exact = ["position_x", "position_y", "position_z"].map(|axis| get(v, axis));
+    for (k, (x, drawn)) in exact.iter().zip(nodes.positions[c]).enumerate() {
+        assert!((x - drawn as f64).abs() < 1e-5, "{id:?} axis {k}");
+    }
+    assert_eq!(s.pick_node(None, Some(exact)), Some(id));
+    id
+}
+
 #[test]
 fn a_layered_wisp_point_shows_its_state_and_its_wisps_contacts() {
     let scene = Scene::load(STYLE, MOTION, SolverKind::Layered).unwrap();
@@ -309,24 +331,8 @@ fn a_layered_wisp_point_shows_its_state_and_its_wisps_contacts() {
         let nodes = &frame.nodes;
         for c in (0..nodes.positions.len()).step_by(13) {
             // The point drawn as instance c, and clicked on its centre: the same point.
-            let id = s.pick_node(Some(c), None).unwrap();
-            let p = nodes.positions[c].map(|x| x as f64);
-            s.inspect(&id, &mut v).unwrap();
-            assert_eq!(get(&v, "wisp"), id.tree as f64);
-            assert_eq!(get(&v, "point"), id.index as f64);
-            for (k, axis) in ["position_x", "position_y", "position_z"]
-                .iter()
-                .enumerate()
-            {
-                assert!((get(&v, axis) - p[k]).abs() < 1e-5, "{id:?} {axis}");
-            }
+            inspect_drawn(&*s, nodes, c, ["wisp", "point"], &mut v);
             assert!((get(&v, "radius") - nodes.radii[c] as f64).abs() < 1e-6);
-            let exact = [
-                get(&v, "position_x"),
-                get(&v, "position_y"),
-                get(&v, "position_z"),
-            ];
-            assert_eq!(s.pick_node(None, Some(exact)), Some(id));
             // The point's own contacts are among its wisp's, and a wisp with contact points
             // has contact pairs.
             let (own, all, pairs) = (
@@ -373,23 +379,7 @@ fn a_guide_vertex_shows_its_state_contacts_links_and_strips() {
         let nodes = &frame.nodes;
         for c in (0..nodes.positions.len()).step_by(7) {
             // The vertex drawn as instance c, and clicked on its centre: the same vertex.
-            let id = s.pick_node(Some(c), None).unwrap();
-            let p = nodes.positions[c].map(|x| x as f64);
-            s.inspect(&id, &mut v).unwrap();
-            assert_eq!(get(&v, "guide"), id.tree as f64);
-            assert_eq!(get(&v, "vertex"), id.index as f64);
-            for (k, axis) in ["position_x", "position_y", "position_z"]
-                .iter()
-                .enumerate()
-            {
-                assert!((get(&v, axis) - p[k]).abs() < 1e-5, "{id:?} {axis}");
-            }
-            let exact = [
-                get(&v, "position_x"),
-                get(&v, "position_y"),
-                get(&v, "position_z"),
-            ];
-            assert_eq!(s.pick_node(None, Some(exact)), Some(id));
+            inspect_drawn(&*s, nodes, c, ["guide", "vertex"], &mut v);
             // The vertex's own contacts are among its guide's; a link intact is below the
             // stretch that breaks it; a triangle not broken is within the strips' ratio.
             let (own, all) = (get(&v, "vertex_contacts"), get(&v, "guide_contacts"));
