@@ -147,11 +147,45 @@ impl Driver {
             .to_owned()
     }
 
-    /// Waits until `f` holds for the text of `css`.
+    /// The text of `css`, or `None` while it is not on the page (the page builds its sliders
+    /// once the first state has come, and builds them again on a switch of model).
+    fn try_text(&self, css: &str) -> Option<String> {
+        let post = |path: String, body: Value| {
+            let headers = [("Content-Type", "application/json")];
+            http(self.port, "POST", &path, &headers, &body.to_string())
+        };
+        let session = format!("/session/{}", self.session);
+        let found = post(
+            format!("{session}/elements"),
+            json!({"using": "css selector", "value": css}),
+        );
+        let v: Value = serde_json::from_str(&found.body).ok()?;
+        let id = v["value"]
+            .as_array()?
+            .first()?
+            .as_object()?
+            .values()
+            .next()?
+            .as_str()?;
+        let text = http(
+            self.port,
+            "GET",
+            &format!("{session}/element/{id}/text"),
+            &[],
+            "",
+        );
+        (text.status == 200).then_some(())?;
+        let v: Value = serde_json::from_str(&text.body).ok()?;
+        Some(v["value"].as_str().unwrap_or_default().to_owned())
+    }
+
+    /// Waits until `css` is on the page and `f` holds for its text.
     fn wait_text(&self, css: &str, what: &str, f: impl Fn(&str) -> bool) -> String {
         let start = Instant::now();
         loop {
-            let t = self.text(css);
+            let t = self
+                .try_text(css)
+                .unwrap_or_else(|| String::from("(not on the page yet)"));
             if f(&t) {
                 return t;
             }
