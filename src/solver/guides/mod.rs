@@ -86,6 +86,8 @@ pub struct GuideSolver {
     /// The static links.
     pub links: Links,
     dense: Dense,
+    /// The alive guides changed since `dense` was bound to them.
+    dense_stale: bool,
     alive: Vec<usize>,
     time: f64,
     pose: Pose,
@@ -186,6 +188,7 @@ impl GuideSolver {
             strips: Strips::default(),
             links: Links::default(),
             dense: Dense::new(&model, gp.blend),
+            dense_stale: true,
             alive: Vec::with_capacity(cap),
             time: 0.0,
             pose: motion.pose(0.0),
@@ -309,7 +312,8 @@ impl GuideSolver {
         }
     }
 
-    /// Strips from the base pairs and the inserted guides; dense binding to the alive guides.
+    /// Strips from the base pairs and the inserted guides; the dense binding is redone before
+    /// the next display ([`GuideSolver::bind_dense`]).
     fn rebuild_topology(&mut self) {
         let mut pairs = Vec::with_capacity(self.base_pairs.len() * 2);
         for (p, &(a, b)) in self.base_pairs.iter().enumerate() {
@@ -327,12 +331,25 @@ impl GuideSolver {
             &self.rest_x,
             self.gp.contact_distance,
         );
+        self.dense_stale = true;
+    }
+
+    /// Binds the dense strands to the guides alive now if the guides changed since the last
+    /// binding. Only the display reads the binding: binding once per frame, however often a
+    /// frame's steps insert and remove guides, gives the same strands (the binding depends on
+    /// the alive guides only, and [`Dense::bind`] gives the full search's result) for less
+    /// work.
+    pub(crate) fn bind_dense(&mut self) {
+        if !self.dense_stale {
+            return;
+        }
         let roots: Vec<_> = self
             .alive
             .iter()
             .map(|&g| (g, self.chains.root_rest[g]))
             .collect();
         self.dense.bind(&self.model, &roots);
+        self.dense_stale = false;
     }
 
     /// The head's motion at `t` for a sub-step `h`: base of the chains (gravity folded in) and

@@ -124,6 +124,7 @@ impl Solver for GuideSolver {
     }
 
     fn sync_display(&mut self) {
+        self.bind_dense();
         let n = self.gp.segments;
         let rot = *self.pose.iso.rotation.to_rotation_matrix().matrix();
         for &g in &self.alive {
