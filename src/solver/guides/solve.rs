@@ -71,12 +71,17 @@ impl Solver for GuideSolver {
         let mut body = 0;
         if self.gp.collision {
             self.strips.update_broken(&self.chains, self.gp.strip_break);
-            self.strips.detect_on(
-                self.pool.as_ref(),
-                &self.chains,
-                &self.alive,
-                2.0 * self.gp.contact_distance,
-            );
+            // Candidates within twice the contact distance cover the hair's motion over the
+            // step's later sub-steps; with one sub-step the contacts are evaluated on the very
+            // positions searched here, and the contact distance itself (with a rounding
+            // slack) finds every contact with fewer candidates.
+            let reach = if sub == 1 {
+                self.gp.contact_distance * (1.0 + 1e-6)
+            } else {
+                2.0 * self.gp.contact_distance
+            };
+            self.strips
+                .detect_on(self.pool.as_ref(), &self.chains, &self.alive, reach);
         }
         let splits0 = self.splits;
         for _ in 0..sub {

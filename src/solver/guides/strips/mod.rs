@@ -10,7 +10,7 @@
 //!
 //! The broad phase is a uniform grid held as a sorted list of (cell, element) pairs, rebuilt
 //! once per step into reused buffers; candidate pairs found within twice the threshold are
-//! re-evaluated at every sub-step.
+//! re-evaluated at every sub-step (within the threshold itself when a step has one sub-step).
 //!
 //! Both the broad phase and a sub-step's contacts are cut into [`CHUNKS`] fixed pieces of work
 //! that the threads of a [`Pool`] take in any order; each piece writes only its own lists, and
