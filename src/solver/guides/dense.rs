@@ -12,6 +12,10 @@
 use nalgebra::{Matrix3, Vector3};
 
 use crate::model::HairModel;
+use crate::par::{for_each_on, split_parts, Pool};
+
+/// Runs of strands the dense update is cut into for the pool's threads.
+const PARTS: usize = 8;
 
 /// The local root frame at rest-pose root `r` of a scalp ellipsoid: columns (tangent, normal,
 /// binormal) from the ellipsoid normal and the global up (y).
@@ -159,35 +163,48 @@ impl Dense {
 
     /// Recomputes every dense point. `disp(g, u)`: guide `g`'s displacement from rest in its
     /// root frame at fractional vertex `u ∈ [0, n]`; `rot`: the head rotation; `root(s)`: the
-    /// world root of strand `s`.
+    /// world root of strand `s`. The strands are cut into [`PARTS`] runs that the threads of
+    /// `pool` take in any order (each point depends only on its strand: the same points on one
+    /// thread or two).
     pub fn update(
         &mut self,
+        pool: Option<&Pool>,
         model: &HairModel,
         rot: &Matrix3<f64>,
-        root_world: impl Fn(&Vector3<f64>) -> Vector3<f64>,
-        disp: impl Fn(usize, f64) -> Vector3<f64>,
+        root_world: impl Fn(&Vector3<f64>) -> Vector3<f64> + Sync,
+        disp: impl Fn(usize, f64) -> Vector3<f64> + Sync,
         n: usize,
     ) {
         let k = model.k;
         let b = self.blend;
-        for s in 0..model.strands.len() {
-            let root = root_world(&model.strands.rest[s * k]);
-            let f = rot * self.frame[s];
-            for i in 0..k {
-                let u = if k > 1 {
-                    i as f64 * n as f64 / (k - 1) as f64
-                } else {
-                    0.0
-                };
-                let mut dl = Vector3::zeros();
-                for j in 0..b {
-                    let g = self.guide[s * b + j];
-                    if g != u32::MAX {
-                        dl += disp(g as usize, u) * self.weight[s * b + j];
+        let strands = model.strands.len();
+        let first = |c: usize| c * strands / PARTS;
+        let parts = split_parts::<_, PARTS>(&mut self.points, |c| first(c + 1) * k);
+        let (guide, weight, frame, local) = (&self.guide, &self.weight, &self.frame, &self.local);
+        for_each_on(pool, PARTS, &|c| {
+            let mut part = parts[c].lock().unwrap_or_else(|e| e.into_inner());
+            let (start, points) = &mut *part;
+            let s0 = *start / k.max(1);
+            for (ds, out) in points.chunks_mut(k.max(1)).enumerate() {
+                let s = s0 + ds;
+                let root = root_world(&model.strands.rest[s * k]);
+                let f = rot * frame[s];
+                for (i, p) in out.iter_mut().enumerate() {
+                    let u = if k > 1 {
+                        i as f64 * n as f64 / (k - 1) as f64
+                    } else {
+                        0.0
+                    };
+                    let mut dl = Vector3::zeros();
+                    for j in 0..b {
+                        let g = guide[s * b + j];
+                        if g != u32::MAX {
+                            dl += disp(g as usize, u) * weight[s * b + j];
+                        }
                     }
+                    *p = root + f * (local[s * k + i] + dl);
                 }
-                self.points[s * k + i] = root + f * (self.local[s * k + i] + dl);
             }
-        }
+        });
     }
 }

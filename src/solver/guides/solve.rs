@@ -142,6 +142,7 @@ impl Solver for GuideSolver {
         let disp = &self.disp;
         let iso = self.pose.iso;
         self.dense.update(
+            self.pool.as_ref(),
             &self.model,
             &rot,
             |r| iso.transform_point(&Point3::from(*r)).coords,
