@@ -559,8 +559,9 @@ fn deterministic() {
         .all(|(x, y)| x.to_bits() == y.to_bits())));
 }
 
-/// The strips' broad phase and contacts on two threads give the state of one thread, bit for
-/// bit (the work is cut into fixed pieces whose results are joined in order).
+/// The strips' broad phase and contacts, and the dense strands' update, on two threads give
+/// the state and the strands of one thread, bit for bit (the work is cut into fixed pieces
+/// whose results are joined in order).
 #[test]
 fn same_state_on_one_thread_or_two() {
     let run = |threads: usize| {
@@ -574,10 +575,17 @@ fn same_state_on_one_thread_or_two() {
             contacts += r.counters.pairs_in_contact;
         }
         assert!(contacts > 1000, "{contacts} contacts");
+        s.sync_display();
+        let mut strands = Vec::new();
+        for st in 0..s.model().strands.len() {
+            s.strand_points(st, &mut strands);
+        }
+        assert!(strands.len() > 1000, "{} dense points", strands.len());
         s.chains
             .x
             .iter()
             .chain(&s.chains.v)
+            .chain(&strands)
             .flat_map(|p| p.iter().map(|c| c.to_bits()).collect::<Vec<_>>())
             .collect::<Vec<u64>>()
     };

@@ -343,7 +343,7 @@ impl GuideSolver {
     /// frame's steps insert and remove guides, gives the same strands (the binding depends on
     /// the alive guides only, and [`Dense::bind`] gives the full search's result) for less
     /// work.
-    pub(crate) fn bind_dense(&mut self) {
+    fn bind_dense(&mut self) {
         if !self.dense_stale {
             return;
         }
