@@ -14,31 +14,25 @@ impl Strips {
 
     /// [`Strips::detect`] on the threads of `pool` (the same candidates in the same order).
     ///
-    /// Every element's box, direction and grid cells are computed once. A vertex is tested
-    /// only against the triangles whose box grown by `reach` holds it, and kept when it is
-    /// within `reach` of the triangle's plane and of each edge's line on the triangle's outer
-    /// side (the triangle's prism grown by `reach`): a test of four dot products that keeps
-    /// every vertex closer than `reach` (the closest point lies on the triangle, inside every
-    /// one of those planes) and a few more near the corners, which the sub-steps' exact test
-    /// then turns down.
+    /// Every segment's box, direction and grid cells are computed once, and the vertices are
+    /// sorted into a grid of the same cells ([`VertexGrid`]). A triangle tests only the
+    /// vertices its box grown by `reach` holds, and keeps those within `reach` of its plane
+    /// and of each edge's line on its outer side (its prism grown by `reach`): a test of four
+    /// dot products that keeps every vertex closer than `reach` (the closest point lies on
+    /// the triangle, inside every one of those planes) and a few more near the corners, which
+    /// the sub-steps' exact test then turns down.
     pub fn detect_on(&mut self, pool: Option<&Pool>, chains: &Chains, alive: &[usize], reach: f64) {
         let n = chains.n;
         let h = chains.len.iter().cloned().fold(0.0, f64::max) + 2.0 * reach;
         self.entries.clear();
-        self.tri_entries.clear();
         self.seg_pairs.clear();
         self.vt_pairs.clear();
-        self.vkeys.clear();
         fill_tangents(chains, alive, &mut self.tangents);
         let links = chains.len.len();
         self.seg_box
             .resize(links, (Vector3::zeros(), Vector3::zeros()));
         self.seg_dir.resize(links, Vector3::zeros());
         self.seg_cell.resize(links, [0; 3]);
-        self.tri_box
-            .resize(self.tri.len(), (Vector3::zeros(), Vector3::zeros()));
-        self.tri_dir.resize(self.tri.len(), Vector3::zeros());
-        self.tri_prism.resize(self.tri.len(), Prism::default());
         let half = Vector3::repeat(reach * 0.5);
         let push_cells =
             |out: &mut Vec<(u64, u32)>, lo: &Vector3<f64>, hi: &Vector3<f64>, id: u32| {
@@ -54,50 +48,24 @@ impl Strips {
                     }
                 }
             };
-        // The segments' and the triangles' boxes, cells and sorted entries touch different
+        // The segments' boxes, cells and sorted entries and the vertices' grid touch different
         // buffers: one thread each.
         let segs = Mutex::new((
             &mut self.seg_box,
             &mut self.seg_cell,
             &mut self.seg_dir,
             &mut self.entries,
-            &mut self.vkeys,
             &mut self.sbox,
         ));
-        let tris = Mutex::new((
-            &mut self.tri_box,
-            &mut self.tri_dir,
-            &mut self.tri_prism,
-            &mut self.tri_entries,
-            &mut self.ebox,
-        ));
-        let (tri, broken, tangents) = (&self.tri, &self.broken, &self.tangents);
+        let grid = Mutex::new(&mut self.grid);
+        let tangents = &self.tangents;
         for_each_on(pool, 2, &|part| {
             if part == 0 {
-                let mut guard = tris.lock().unwrap_or_else(|e| e.into_inner());
-                let (tri_box, tri_dir, tri_prism, tri_entries, ebox) = &mut *guard;
-                let full = Vector3::repeat(reach);
-                for t in 0..tri.len() {
-                    if broken[t] {
-                        continue;
-                    }
-                    let tp = tri[t].map(|v| chains.x[v as usize]);
-                    let [a, b, c] = tp;
-                    let (lo, hi) = (a.inf(&b).inf(&c) - full, a.sup(&b).sup(&c) + full);
-                    tri_box[t] = (lo, hi);
-                    let mut dir = Vector3::zeros();
-                    for w in tri[t] {
-                        dir += tangents[w as usize];
-                    }
-                    tri_dir[t] = dir.try_normalize(1e-12).unwrap_or_else(Vector3::y);
-                    tri_prism[t] = Prism::new(&tp);
-                    push_cells(tri_entries, &lo, &hi, t as u32);
-                }
-                tri_entries.sort_unstable();
-                fill_boxes(ebox, tri_entries, tri_box);
+                let mut guard = grid.lock().unwrap_or_else(|e| e.into_inner());
+                guard.build(chains, alive, tangents, h);
             } else {
                 let mut guard = segs.lock().unwrap_or_else(|e| e.into_inner());
-                let (seg_box, seg_cell, seg_dir, entries, vkeys, sbox) = &mut *guard;
+                let (seg_box, seg_cell, seg_dir, entries, sbox) = &mut *guard;
                 for &g in alive {
                     for i in 0..n {
                         let l = g * n + i;
@@ -109,12 +77,9 @@ impl Strips {
                         let t = q - p;
                         seg_dir[l] = t / t.norm();
                         push_cells(entries, &lo, &hi, l as u32);
-                        let x = chains.x[v + 1];
-                        vkeys.push((cell_key(cell_of(&x, h)), (v + 1) as u32));
                     }
                 }
                 entries.sort_unstable();
-                vkeys.sort_unstable();
                 fill_boxes(sbox, entries, seg_box);
             }
         });
@@ -128,7 +93,7 @@ impl Strips {
             chunk.seg.clear();
             chunk.vt.clear();
             this.seg_piece(c, n, &mut chunk.seg);
-            this.vt_piece(c, chains, reach, &mut chunk.vt);
+            this.tri_piece(c, chains, reach, &mut chunk.vt);
         });
         let mut chunks = std::mem::take(&mut self.chunks);
         for m in &mut chunks {
@@ -248,55 +213,6 @@ impl Strips {
             s = e;
         }
     }
-
-    /// Piece `c` of the vertex–triangle pairs: its share of the vertices sorted by cell. A
-    /// vertex sits in one cell; each triangle is listed in every cell its box grown by `reach`
-    /// touches, so every triangle within `reach` is listed there.
-    fn vt_piece(&self, c: usize, chains: &Chains, reach: f64, out: &mut Vec<(u32, u32)>) {
-        let n = chains.n;
-        let len = self.vkeys.len();
-        let far = reach * (1.0 + 1e-9);
-        let mut key = u64::MAX;
-        let (mut start, mut end) = (0, 0);
-        let min2 = MIN_CROSSING * MIN_CROSSING;
-        for &(k, v) in &self.vkeys[c * len / CHUNKS..(c + 1) * len / CHUNKS] {
-            if k != key {
-                key = k;
-                start = self.tri_entries.partition_point(|e| e.0 < key);
-                end = start + self.tri_entries[start..].partition_point(|e| e.0 == key);
-            }
-            let v = v as usize;
-            let g = (v / (n + 1)) as u32;
-            let x = chains.x[v];
-            // Rounding to the nearest f32 keeps the order with the boxes' f32 bounds, which
-            // are rounded outwards: no vertex inside a box falls out.
-            let xf = [x.x as f32, x.y as f32, x.z as f32];
-            let hair = self.tangents[v];
-            let a = [xf[0], xf[1], xf[2], xf[0], xf[1], xf[2]];
-            let mut i = start;
-            while i < end {
-                // The box test of eight entries without a branch (a bit mask; the entries past
-                // the run masked off), then the other tests on the boxes that hold the vertex.
-                let m = 8;
-                let mut mask = overlap8(&a, &self.ebox, i) & tail_mask(end - i);
-                while mask != 0 {
-                    let j = mask.trailing_zeros() as usize;
-                    mask &= mask - 1;
-                    let t = self.tri_entries[i + j].1 as usize;
-                    let [ga, gb] = self.tri_guides[t];
-                    if ga == g
-                        || gb == g
-                        || hair.cross(&self.tri_dir[t]).norm_squared() < min2
-                        || !self.tri_prism[t].near(&x, far)
-                    {
-                        continue;
-                    }
-                    out.push((v as u32, t as u32));
-                }
-                i += m;
-            }
-        }
-    }
 }
 
 /// The boxes of `entries` (element ids into `boxes`) side by side in `f32`, rounded outwards
@@ -329,7 +245,7 @@ fn fill_boxes(
 
 /// Bits `0..m` set (all eight from 8 on).
 #[inline]
-fn tail_mask(m: usize) -> u32 {
+pub(super) fn tail_mask(m: usize) -> u32 {
     if m >= 8 {
         0xff
     } else {
@@ -367,7 +283,7 @@ fn overlap8(a: &[f32; 6], boxes: &[Vec<f32>; 6], i: usize) -> u32 {
 
 /// The largest `f32` not above `x`.
 #[inline]
-fn f32_down(x: f64) -> f32 {
+pub(super) fn f32_down(x: f64) -> f32 {
     let f = x as f32;
     if f as f64 > x {
         f.next_down()
@@ -378,7 +294,7 @@ fn f32_down(x: f64) -> f32 {
 
 /// The smallest `f32` not below `x`.
 #[inline]
-fn f32_up(x: f64) -> f32 {
+pub(super) fn f32_up(x: f64) -> f32 {
     let f = x as f32;
     if (f as f64) < x {
         f.next_up()

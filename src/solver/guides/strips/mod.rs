@@ -8,9 +8,10 @@
 //! on a triangle go to its vertices by barycentric weights. A triangle stretched wider than
 //! `strip_break` times its rest width is broken while it stays so (reversible, unlike links).
 //!
-//! The broad phase is a uniform grid held as a sorted list of (cell, element) pairs, rebuilt
-//! once per step into reused buffers; candidate pairs found within twice the threshold are
-//! re-evaluated at every sub-step (within the threshold itself when a step has one sub-step).
+//! The broad phase is a uniform grid, held for the segments as a sorted list of (cell, element)
+//! pairs and for the vertices as a dense counting sort, rebuilt once per step into reused
+//! buffers; candidate pairs found within twice the threshold are re-evaluated at every
+//! sub-step (within the threshold itself when a step has one sub-step).
 //!
 //! Both the broad phase and a sub-step's contacts are cut into [`CHUNKS`] fixed pieces of work
 //! that the threads of a [`Pool`] take in any order; each piece writes only its own lists, and
@@ -19,8 +20,9 @@
 //! took which piece.
 //!
 //! Files: `mod.rs` (the strips, their triangles and buffers, tangents, closest points),
-//! `broad.rs` (the broad phase: grid, boxes, the triangle's prism test), `contacts.rs` (each
-//! sub-step's contact forces), `tests.rs`.
+//! `broad.rs` (the broad phase: the segments' grid and boxes, the triangle's prism test),
+//! `vertex_grid.rs` (the vertex–triangle search: the vertices in a dense grid, each triangle
+//! testing those in its cells), `contacts.rs` (each sub-step's contact forces), `tests.rs`.
 
 use std::sync::Mutex;
 
@@ -35,9 +37,11 @@ mod broad;
 mod contacts;
 #[cfg(test)]
 mod tests;
+mod vertex_grid;
 
 use broad::Prism;
 use contacts::TrianglePre;
+use vertex_grid::VertexGrid;
 
 /// The orientation factor of Eq. 3 for hair direction `a` against the other element's hair
 /// direction `b` (both unit): `|a × b|`, the sine of their angle: 0 aligned, 1 perpendicular.
@@ -148,7 +152,6 @@ pub struct Strips {
     /// Per triangle: broken at the last check.
     pub broken: Vec<bool>,
     entries: Vec<(u64, u32)>,
-    tri_entries: Vec<(u64, u32)>,
     /// Candidate segment–segment pairs (links, lower first).
     seg_pairs: Vec<(u32, u32)>,
     /// Candidate vertex–triangle pairs as found (vertex-major), then grouped by triangle:
@@ -164,20 +167,13 @@ pub struct Strips {
     seg_box: Vec<(Vector3<f64>, Vector3<f64>)>,
     seg_cell: Vec<[i64; 3]>,
     seg_dir: Vec<Vector3<f64>>,
-    /// Per triangle: box grown by the reach, and hair direction (`detect`).
-    tri_box: Vec<(Vector3<f64>, Vector3<f64>)>,
-    tri_dir: Vec<Vector3<f64>>,
-    /// Per triangle: its slab and edge planes (`detect`).
-    tri_prism: Vec<Prism>,
     /// Per triangle: the guides of its two sides.
     tri_guides: Vec<[u32; 2]>,
-    /// Per entry of `tri_entries`: its triangle's box grown by the reach, as `f32` rounded
-    /// outwards (low x, y, z, high x, y, z), side by side for a vertex to test eight at once.
-    ebox: [Vec<f32>; 6],
-    /// The same of the segments' boxes, per entry of `entries`.
+    /// The segments' boxes per entry of `entries`, as `f32` rounded outwards (low x, y, z,
+    /// high x, y, z), side by side for a segment to test eight at once.
     sbox: [Vec<f32>; 6],
     /// The alive guides' vertices (roots left out) by grid cell (`detect`).
-    vkeys: Vec<(u64, u32)>,
+    grid: VertexGrid,
     /// The pieces' findings.
     chunks: Vec<Mutex<Chunk>>,
 }
@@ -289,17 +285,15 @@ impl Strips {
 
     /// Bytes held by the reused buffers.
     pub fn reserved_bytes(&self) -> usize {
-        (self.entries.capacity() + self.tri_entries.capacity()) * 16
+        self.entries.capacity() * 16
             + (self.seg_pairs.capacity() + self.vt_pairs.capacity()) * 8
             + (self.tri_start.capacity() + self.tri_verts.capacity() + self.cursor.capacity()) * 4
             + self.tangents.capacity() * 24
-            + (self.seg_box.capacity() + self.tri_box.capacity()) * 48
+            + self.seg_box.capacity() * 48
             + self.seg_cell.capacity() * 24
-            + (self.seg_dir.capacity() + self.tri_dir.capacity()) * 24
-            + self.tri_prism.capacity() * std::mem::size_of::<Prism>()
+            + self.seg_dir.capacity() * 24
             + self.tri_guides.capacity() * 8
-            + self.vkeys.capacity() * 16
-            + self.ebox.iter().map(|b| b.capacity() * 4).sum::<usize>()
+            + self.grid.reserved_bytes()
             + self.sbox.iter().map(|b| b.capacity() * 4).sum::<usize>()
             + self
                 .chunks

@@ -104,6 +104,67 @@ fn prism_keeps_every_point_closer_than_the_reach() {
     assert!(Prism::new(&line).near(&Vector3::y(), 1e-3));
 }
 
+/// Checks by brute force that the last broad phase of `s` kept every vertex–triangle pair
+/// closer than `reach` that the contacts could need (vertex off the triangle's guides,
+/// crossing it); returns how many there are.
+fn assert_finds_every_vt_pair(c: &Chains, s: &Strips, reach: f64, seed: u64) -> usize {
+    let found = vt_set(s);
+    let n = c.n;
+    let mut tangents = Vec::new();
+    fill_all_tangents(c, &mut tangents);
+    let mut exact = 0;
+    for v in 0..c.x.len() {
+        if v % (n + 1) == 0 {
+            continue;
+        }
+        for (t, tv) in s.tri.iter().enumerate() {
+            let tp = tv.map(|w| c.x[w as usize]);
+            let (cp, _) = closest_on_triangle(&c.x[v], &tp);
+            let dir = tv
+                .iter()
+                .map(|&w| tangents[w as usize])
+                .sum::<Vector3<f64>>();
+            let dir = dir.normalize();
+            let own = tv.iter().any(|&w| w as usize / (n + 1) == v / (n + 1));
+            let crossing = tangents[v].cross(&dir).norm() >= MIN_CROSSING * 1.001;
+            if (c.x[v] - cp).norm() < reach && !own && crossing {
+                exact += 1;
+                assert!(
+                    found.contains(&(v as u32, t as u32)),
+                    "seed {seed} reach {reach}: vertex {v} triangle {t} missed"
+                );
+            }
+        }
+    }
+    exact
+}
+
+/// A few guides flung metres away from the others stretch the vertices' grid past its
+/// largest size: the cells past its edge are clamped into it, and every pair is still found,
+/// both among the far guides and among the near ones.
+#[test]
+fn guides_far_from_the_others_still_find_their_pairs() {
+    for seed in 1..4 {
+        let (mut c, mut s) = tangle(seed, 12, 6);
+        let n = c.n;
+        for v in 8 * (n + 1)..12 * (n + 1) {
+            c.x[v] += Vector3::new(7.0, -3.0, 5.0);
+        }
+        // No strip between the two groups (a triangle metres long gets no contact at all).
+        let pairs: Vec<(u32, u32)> = s.pairs.iter().copied().filter(|&p| p != (7, 8)).collect();
+        s.rebuild(n, &pairs, &c.x.clone(), 0.001);
+        let alive: Vec<usize> = (0..12).collect();
+        s.detect(&c, &alive, 0.012);
+        let exact = assert_finds_every_vt_pair(&c, &s, 0.012, seed);
+        assert!(exact > 20, "seed {seed}: only {exact} pairs");
+        let far = vt_set(&s)
+            .iter()
+            .filter(|&&(v, _)| v as usize >= 8 * (n + 1))
+            .count();
+        assert!(far > 0, "seed {seed}: no pair among the far guides");
+    }
+}
+
 /// The broad phase keeps every vertex–triangle pair closer than the reach that the
 /// contacts could need (vertex off the triangle's guides, crossing it), and every crossing
 /// segment pair closer than the reach, whatever the grid makes of them.
@@ -114,34 +175,8 @@ fn broad_phase_finds_every_pair_within_the_reach() {
         let alive: Vec<usize> = (0..12).collect();
         for reach in [0.002, 0.006, 0.012, 0.03] {
             s.detect(&c, &alive, reach);
-            let found = vt_set(&s);
+            let exact = assert_finds_every_vt_pair(&c, &s, reach, seed);
             let n = c.n;
-            let mut tangents = Vec::new();
-            fill_all_tangents(&c, &mut tangents);
-            let mut exact = 0;
-            for v in 0..c.x.len() {
-                if v % (n + 1) == 0 {
-                    continue;
-                }
-                for (t, tv) in s.tri.iter().enumerate() {
-                    let tp = tv.map(|w| c.x[w as usize]);
-                    let (cp, _) = closest_on_triangle(&c.x[v], &tp);
-                    let dir = tv
-                        .iter()
-                        .map(|&w| tangents[w as usize])
-                        .sum::<Vector3<f64>>();
-                    let dir = dir.normalize();
-                    let own = tv.iter().any(|&w| w as usize / (n + 1) == v / (n + 1));
-                    let crossing = tangents[v].cross(&dir).norm() >= MIN_CROSSING * 1.001;
-                    if (c.x[v] - cp).norm() < reach && !own && crossing {
-                        exact += 1;
-                        assert!(
-                            found.contains(&(v as u32, t as u32)),
-                            "seed {seed} reach {reach}: vertex {v} triangle {t} missed"
-                        );
-                    }
-                }
-            }
             if reach >= 0.012 {
                 assert!(exact > 20, "seed {seed} reach {reach}: only {exact} pairs");
             }
