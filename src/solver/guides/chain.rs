@@ -90,6 +90,8 @@ pub struct Chains {
     /// diagnostic: nothing limits the rates).
     pub peak_rate: f64,
     scratch: Scratch,
+    /// One scratch per run of [`Chains::runs`].
+    run_scratch: Vec<Scratch>,
 }
 
 #[derive(Debug, Clone, Default)]
@@ -101,6 +103,228 @@ struct Scratch {
     c: Vec<Vector6<f64>>,
     ia: Vec<Matrix6<f64>>,
     pa: Vec<Vector6<f64>>,
+}
+
+impl Scratch {
+    fn new(n: usize) -> Scratch {
+        Scratch {
+            s: vec![Matrix6x2::zeros(); n],
+            u: vec![Matrix6x2::zeros(); n],
+            dinv: vec![Matrix2::zeros(); n],
+            tau: vec![Vector2::zeros(); n],
+            c: vec![Vector6::zeros(); n],
+            ia: vec![Matrix6::zeros(); n],
+            pa: vec![Vector6::zeros(); n],
+        }
+    }
+}
+
+/// A run of consecutive guide slots of [`Chains`], borrowed for one thread: the guides' joint
+/// state and what forward kinematics derives from it, mutable; their constants and this
+/// sub-step's vertex forces, shared. Between the forces' gathering and the next one a guide
+/// reads nothing of another guide, so runs advance on different threads with the same result,
+/// bit for bit, as one after the other.
+pub struct ChainRun<'a> {
+    n: usize,
+    /// The run's first slot: its link `l` is `first · n + l` of the chains, its vertex `v`
+    /// is `first · (n + 1) + v`.
+    first: usize,
+    q: &'a mut [UnitQuaternion<f64>],
+    qd: &'a mut [Vector2<f64>],
+    rot: &'a mut [Matrix3<f64>],
+    vs: &'a mut [Vector6<f64>],
+    x: &'a mut [Vector3<f64>],
+    v: &'a mut [Vector3<f64>],
+    /// Per guide, per link and per vertex of all the chains (indexed like [`Chains`]).
+    root_rest: &'a [Vector3<f64>],
+    r0: &'a [Matrix3<f64>],
+    len: &'a [f64],
+    k: &'a [f64],
+    c: &'a [f64],
+    m: &'a [f64],
+    j: &'a [f64],
+    f: &'a [Vector3<f64>],
+    scratch: &'a mut Scratch,
+    /// The chains' [`Chains::peak_rate`], raised by this run's integration.
+    pub peak_rate: f64,
+}
+
+/// `v` cut at the slot boundaries `ends` (in slots of `per` elements; non-decreasing, the last
+/// at most the slots of `v`) into consecutive parts. An array: cutting allocates nothing.
+fn cut<'a, T, const P: usize>(v: &'a mut [T], ends: &[usize; P], per: usize) -> [&'a mut [T]; P] {
+    let mut rest = v;
+    let mut taken = 0;
+    std::array::from_fn(|c| {
+        let e = ends[c] * per;
+        let (mine, tail) = std::mem::take(&mut rest).split_at_mut(e - taken);
+        rest = tail;
+        taken = e;
+        mine
+    })
+}
+
+impl ChainRun<'_> {
+    /// Forward kinematics of guide `g`: link rotations, vertex positions and velocities, link
+    /// spatial velocities, from the joint state and the head. Linear in the chain length
+    /// (§3.1: "the whole chain can be evaluated in linear time").
+    pub fn fk(&mut self, g: usize, base: &Base, root: &Vector3<f64>) {
+        let n = self.n;
+        let (v0, l0) = self.local(g);
+        self.x[v0] = *root;
+        self.v[v0] = lin(&base.vel) + ang(&base.vel).cross(root);
+        let mut parent = base.rot;
+        let mut vp = base.vel;
+        for i in 0..n {
+            let (l, li) = (g * n + i, l0 + i);
+            let cf = parent * self.r0[l] * self.q[li].to_rotation_matrix().into_inner();
+            let u1 = cf.column(0).into_owned();
+            let u2 = cf.column(2).into_owned();
+            let p = self.x[v0 + i];
+            let s1 = six(u1, p.cross(&u1));
+            let s2 = six(u2, p.cross(&u2));
+            let sq = s1 * self.qd[li].x + s2 * self.qd[li].y;
+            let vs = vp + sq;
+            let end = p + cf.column(1) * self.len[l];
+            self.x[v0 + i + 1] = end;
+            self.v[v0 + i + 1] = lin(&vs) + ang(&vs).cross(&end);
+            self.rot[li] = cf;
+            self.vs[li] = vs;
+            let mut s = Matrix6x2::zeros();
+            s.set_column(0, &s1);
+            s.set_column(1, &s2);
+            self.scratch.s[i] = s;
+            // Ṡ q̇: both axes are fixed in the child, so Ṡ = v × S, and v × S q̇ = v_p × S q̇.
+            self.scratch.c[i] = cross_motion(&vp, &sq);
+            parent = cf;
+            vp = vs;
+        }
+    }
+
+    /// Joint accelerations of guide `g` by the articulated-body algorithm (three passes, linear
+    /// time), then one semi-implicit Euler step of length `h`: the rates first, then each joint
+    /// turned by `exp(h (ȧ, 0, ḃ))` about its current axes. Uses the kinematics of the last
+    /// [`Chains::fk`] of this guide and its vertex forces `f`.
+    pub fn integrate(&mut self, g: usize, base: &Base, h: f64) {
+        let n = self.n;
+        let (v0, l0) = self.local(g);
+        let sc = &mut *self.scratch;
+        for i in 0..n {
+            let (l, li) = (g * n + i, l0 + i);
+            let c = self.x[v0 + i + 1];
+            sc.ia[i] = inertia(self.m[l], self.j[l], &c);
+            let vs = self.vs[li];
+            let fe = self.f[g * (n + 1) + i + 1];
+            sc.pa[i] = cross_force(&vs, &(sc.ia[i] * vs)) - six(c.cross(&fe), fe);
+            // The actuators are integrated implicitly (their torque at the end of the step):
+            // τ = −k(θ + h q̇ + h² q̈) − c(q̇ + h q̈), θ the swing part of log J (the gradient of
+            // ½ k |log J|² along the joint's two axes). The q̈ terms move into the joint-space
+            // inertia below, so stiff actuators stay stable at any step.
+            let th = log(&self.q[li]);
+            let th = Vector2::new(th.x, th.z);
+            sc.tau[i] = -(th + self.qd[li] * h) * self.k[l] - self.qd[li] * self.c[l];
+        }
+        for i in (0..n).rev() {
+            let s = sc.s[i];
+            let u = sc.ia[i] * s;
+            let d = s.transpose() * u
+                + Matrix2::identity() * (h * h * self.k[g * n + i] + h * self.c[g * n + i]);
+            let dinv = d.try_inverse().unwrap_or_else(Matrix2::zeros);
+            let uu = sc.tau[i] - s.transpose() * sc.pa[i];
+            sc.u[i] = u;
+            sc.dinv[i] = dinv;
+            sc.tau[i] = uu;
+            if i > 0 {
+                let ia = sc.ia[i] - u * dinv * u.transpose();
+                let pa = sc.pa[i] + ia * sc.c[i] + u * (dinv * uu);
+                sc.ia[i - 1] += ia;
+                sc.pa[i - 1] += pa;
+            }
+        }
+        let mut a = base.acc;
+        let mut peak = self.peak_rate;
+        for i in 0..n {
+            let li = l0 + i;
+            let ap = a + sc.c[i];
+            let qdd = sc.dinv[i] * (sc.tau[i] - sc.u[i].transpose() * ap);
+            a = ap + sc.s[i] * qdd;
+            self.qd[li] += qdd * h;
+            let w = self.qd[li] * h;
+            let mut q = self.q[li] * exp(&Vector3::new(w.x, 0.0, w.y));
+            q.renormalize_fast();
+            self.q[li] = q;
+            peak = peak.max(self.qd[li].norm());
+        }
+        self.peak_rate = peak;
+    }
+
+    /// Puts guide `g` in the configuration of the points `pts` (`n + 1`, root first; only the
+    /// segment directions are used, lengths stay the chain's) moving with the vertex velocities
+    /// `vel`, for the head `base`. Needs the kinematics of the last [`Chains::fk`] of this guide
+    /// with the same head: each link is turned from its current frame by the smallest rotation
+    /// onto its new direction (so no twist is introduced and there is no singular pose), and
+    /// each joint takes the rates that give its end vertex the velocity `vel` perpendicular to
+    /// the segment (the component along it is fixed by the segment's length), root to tip.
+    /// Call [`Chains::fk`] next.
+    pub fn set_state(&mut self, g: usize, base: &Base, pts: &[Vector3<f64>], vel: &[Vector3<f64>]) {
+        let n = self.n;
+        let (v0, l0) = self.local(g);
+        let mut parent = base.rot;
+        let mut wp = ang(&base.vel);
+        let mut vx = lin(&base.vel) + wp.cross(&self.x[v0]);
+        for i in 0..n {
+            let (l, li) = (g * n + i, l0 + i);
+            let cur = self.rot[li];
+            let dc = cur.column(1).into_owned();
+            let d = (pts[i + 1] - pts[i]).try_normalize(1e-12).unwrap_or(dc);
+            let child = min_rotation(&dc, &d) * cur;
+            let jm = (parent * self.r0[l]).transpose() * child;
+            let mut q = UnitQuaternion::from_rotation_matrix(
+                &nalgebra::Rotation3::from_matrix_unchecked(jm),
+            );
+            q.renormalize();
+            self.q[li] = q;
+            let len = self.len[l];
+            let dv = vel[i + 1] - vx;
+            let w = d * wp.dot(&d) + d.cross(&dv) / len;
+            let rel = w - wp;
+            self.qd[li] = Vector2::new(child.column(0).dot(&rel), child.column(2).dot(&rel));
+            vx += w.cross(&(d * len));
+            parent = child;
+            wp = w;
+        }
+    }
+
+    /// Guide `g`'s first vertex and first link in this run's slices.
+    fn local(&self, g: usize) -> (usize, usize) {
+        let s = g - self.first;
+        (s * (self.n + 1), s * self.n)
+    }
+
+    /// Largest joint rate of guide `g`, rad/s.
+    pub fn max_rate(&self, g: usize) -> f64 {
+        let (_, l0) = self.local(g);
+        self.qd[l0..l0 + self.n]
+            .iter()
+            .map(|q| q.norm())
+            .fold(0.0, f64::max)
+    }
+
+    /// Guide `g`'s rest root.
+    pub fn root_rest(&self, g: usize) -> Vector3<f64> {
+        self.root_rest[g]
+    }
+
+    /// Guide `g`'s link lengths.
+    pub fn lengths(&self, g: usize) -> &[f64] {
+        &self.len[g * self.n..(g + 1) * self.n]
+    }
+
+    /// Guide `g`'s vertex positions and velocities (root first).
+    pub fn vertices(&self, g: usize) -> (&[Vector3<f64>], &[Vector3<f64>]) {
+        let (v0, _) = self.local(g);
+        let r = v0..v0 + self.n + 1;
+        (&self.x[r.clone()], &self.v[r])
+    }
 }
 
 fn skew(v: &Vector3<f64>) -> Matrix3<f64> {
@@ -221,14 +445,7 @@ impl Chains {
         c.f.resize(verts, Vector3::zeros());
         c.damp.resize(verts, 0.0);
         c.soft.resize(verts, 1.0);
-        let sc = &mut c.scratch;
-        sc.s.resize(n, Matrix6x2::zeros());
-        sc.u.resize(n, Matrix6x2::zeros());
-        sc.dinv.resize(n, Matrix2::zeros());
-        sc.tau.resize(n, Vector2::zeros());
-        sc.c.resize(n, Vector6::zeros());
-        sc.ia.resize(n, Matrix6::zeros());
-        sc.pa.resize(n, Vector6::zeros());
+        c.scratch = Scratch::new(n);
         c
     }
 
@@ -300,134 +517,84 @@ impl Chains {
         self.q[l] = exp(&Vector3::new(swing.x, 0.0, swing.y));
     }
 
-    /// Forward kinematics of guide `g`: link rotations, vertex positions and velocities, link
-    /// spatial velocities, from the joint state and the head. Linear in the chain length
-    /// (§3.1: "the whole chain can be evaluated in linear time").
-    pub fn fk(&mut self, g: usize, base: &Base, root: &Vector3<f64>) {
-        let n = self.n;
-        let v0 = g * (n + 1);
-        self.x[v0] = *root;
-        self.v[v0] = lin(&base.vel) + ang(&base.vel).cross(root);
-        let mut parent = base.rot;
-        let mut vp = base.vel;
-        for i in 0..n {
-            let l = g * n + i;
-            let cf = parent * self.r0[l] * self.q[l].to_rotation_matrix().into_inner();
-            let u1 = cf.column(0).into_owned();
-            let u2 = cf.column(2).into_owned();
-            let p = self.x[v0 + i];
-            let s1 = six(u1, p.cross(&u1));
-            let s2 = six(u2, p.cross(&u2));
-            let sq = s1 * self.qd[l].x + s2 * self.qd[l].y;
-            let vs = vp + sq;
-            let end = p + cf.column(1) * self.len[l];
-            self.x[v0 + i + 1] = end;
-            self.v[v0 + i + 1] = lin(&vs) + ang(&vs).cross(&end);
-            self.rot[l] = cf;
-            self.vs[l] = vs;
-            let mut s = Matrix6x2::zeros();
-            s.set_column(0, &s1);
-            s.set_column(1, &s2);
-            self.scratch.s[i] = s;
-            // Ṡ q̇: both axes are fixed in the child, so Ṡ = v × S, and v × S q̇ = v_p × S q̇.
-            self.scratch.c[i] = cross_motion(&vp, &sq);
-            parent = cf;
-            vp = vs;
+    /// All slots as one run, with the chains' own scratch.
+    fn whole(&mut self) -> ChainRun<'_> {
+        ChainRun {
+            n: self.n,
+            first: 0,
+            q: &mut self.q,
+            qd: &mut self.qd,
+            rot: &mut self.rot,
+            vs: &mut self.vs,
+            x: &mut self.x,
+            v: &mut self.v,
+            root_rest: &self.root_rest,
+            r0: &self.r0,
+            len: &self.len,
+            k: &self.k,
+            c: &self.c,
+            m: &self.m,
+            j: &self.j,
+            f: &self.f,
+            scratch: &mut self.scratch,
+            peak_rate: self.peak_rate,
         }
     }
 
-    /// Joint accelerations of guide `g` by the articulated-body algorithm (three passes, linear
-    /// time), then one semi-implicit Euler step of length `h`: the rates first, then each joint
-    /// turned by `exp(h (ȧ, 0, ḃ))` about its current axes. Uses the kinematics of the last
-    /// [`Chains::fk`] of this guide and its vertex forces `f`.
-    pub fn integrate(&mut self, g: usize, base: &Base, h: f64) {
+    /// The slots cut into `P` runs, run `c` ending before slot `ends[c]` (non-decreasing, the
+    /// last the capacity), each with a scratch of its own, for as many threads. After them,
+    /// fold each run's [`ChainRun::peak_rate`] into [`Chains::peak_rate`].
+    pub fn runs<const P: usize>(&mut self, ends: &[usize; P]) -> [ChainRun<'_>; P] {
         let n = self.n;
-        let v0 = g * (n + 1);
-        let sc = &mut self.scratch;
-        for i in 0..n {
-            let l = g * n + i;
-            let c = self.x[v0 + i + 1];
-            sc.ia[i] = inertia(self.m[l], self.j[l], &c);
-            let vs = self.vs[l];
-            let fe = self.f[v0 + i + 1];
-            sc.pa[i] = cross_force(&vs, &(sc.ia[i] * vs)) - six(c.cross(&fe), fe);
-            // The actuators are integrated implicitly (their torque at the end of the step):
-            // τ = −k(θ + h q̇ + h² q̈) − c(q̇ + h q̈), θ the swing part of log J (the gradient of
-            // ½ k |log J|² along the joint's two axes). The q̈ terms move into the joint-space
-            // inertia below, so stiff actuators stay stable at any step.
-            let th = log(&self.q[l]);
-            let th = Vector2::new(th.x, th.z);
-            sc.tau[i] = -(th + self.qd[l] * h) * self.k[l] - self.qd[l] * self.c[l];
+        if self.run_scratch.len() < P {
+            self.run_scratch.resize_with(P, || Scratch::new(n));
         }
-        for i in (0..n).rev() {
-            let s = sc.s[i];
-            let u = sc.ia[i] * s;
-            let d = s.transpose() * u
-                + Matrix2::identity() * (h * h * self.k[g * n + i] + h * self.c[g * n + i]);
-            let dinv = d.try_inverse().unwrap_or_else(Matrix2::zeros);
-            let uu = sc.tau[i] - s.transpose() * sc.pa[i];
-            sc.u[i] = u;
-            sc.dinv[i] = dinv;
-            sc.tau[i] = uu;
-            if i > 0 {
-                let ia = sc.ia[i] - u * dinv * u.transpose();
-                let pa = sc.pa[i] + ia * sc.c[i] + u * (dinv * uu);
-                sc.ia[i - 1] += ia;
-                sc.pa[i - 1] += pa;
-            }
-        }
-        let mut a = base.acc;
-        let mut peak = self.peak_rate;
-        for i in 0..n {
-            let l = g * n + i;
-            let ap = a + sc.c[i];
-            let qdd = sc.dinv[i] * (sc.tau[i] - sc.u[i].transpose() * ap);
-            a = ap + sc.s[i] * qdd;
-            self.qd[l] += qdd * h;
-            let w = self.qd[l] * h;
-            let mut q = self.q[l] * exp(&Vector3::new(w.x, 0.0, w.y));
-            q.renormalize_fast();
-            self.q[l] = q;
-            peak = peak.max(self.qd[l].norm());
-        }
+        let mut q = cut(&mut self.q, ends, n).into_iter();
+        let mut qd = cut(&mut self.qd, ends, n).into_iter();
+        let mut rot = cut(&mut self.rot, ends, n).into_iter();
+        let mut vs = cut(&mut self.vs, ends, n).into_iter();
+        let mut x = cut(&mut self.x, ends, n + 1).into_iter();
+        let mut v = cut(&mut self.v, ends, n + 1).into_iter();
+        let mut scratch = self.run_scratch.iter_mut();
+        let peak_rate = self.peak_rate;
+        std::array::from_fn(|c| ChainRun {
+            n,
+            first: if c == 0 { 0 } else { ends[c - 1] },
+            q: q.next().expect("P runs"),
+            qd: qd.next().expect("P runs"),
+            rot: rot.next().expect("P runs"),
+            vs: vs.next().expect("P runs"),
+            x: x.next().expect("P runs"),
+            v: v.next().expect("P runs"),
+            root_rest: &self.root_rest,
+            r0: &self.r0,
+            len: &self.len,
+            k: &self.k,
+            c: &self.c,
+            m: &self.m,
+            j: &self.j,
+            f: &self.f,
+            scratch: scratch.next().expect("a scratch per run"),
+            peak_rate,
+        })
+    }
+
+    /// [`ChainRun::fk`] of guide `g`.
+    pub fn fk(&mut self, g: usize, base: &Base, root: &Vector3<f64>) {
+        self.whole().fk(g, base, root);
+    }
+
+    /// [`ChainRun::integrate`] of guide `g`.
+    pub fn integrate(&mut self, g: usize, base: &Base, h: f64) {
+        let mut run = self.whole();
+        run.integrate(g, base, h);
+        let peak = run.peak_rate;
         self.peak_rate = peak;
     }
 
-    /// Puts guide `g` in the configuration of the points `pts` (`n + 1`, root first; only the
-    /// segment directions are used, lengths stay the chain's) moving with the vertex velocities
-    /// `vel`, for the head `base`. Needs the kinematics of the last [`Chains::fk`] of this guide
-    /// with the same head: each link is turned from its current frame by the smallest rotation
-    /// onto its new direction (so no twist is introduced and there is no singular pose), and
-    /// each joint takes the rates that give its end vertex the velocity `vel` perpendicular to
-    /// the segment (the component along it is fixed by the segment's length), root to tip.
-    /// Call [`Chains::fk`] next.
+    /// [`ChainRun::set_state`] of guide `g`.
     pub fn set_state(&mut self, g: usize, base: &Base, pts: &[Vector3<f64>], vel: &[Vector3<f64>]) {
-        let n = self.n;
-        let v0 = g * (n + 1);
-        let mut parent = base.rot;
-        let mut wp = ang(&base.vel);
-        let mut vx = lin(&base.vel) + wp.cross(&self.x[v0]);
-        for i in 0..n {
-            let l = g * n + i;
-            let cur = self.rot[l];
-            let dc = cur.column(1).into_owned();
-            let d = (pts[i + 1] - pts[i]).try_normalize(1e-12).unwrap_or(dc);
-            let child = min_rotation(&dc, &d) * cur;
-            let jm = (parent * self.r0[l]).transpose() * child;
-            let mut q = UnitQuaternion::from_rotation_matrix(
-                &nalgebra::Rotation3::from_matrix_unchecked(jm),
-            );
-            q.renormalize();
-            self.q[l] = q;
-            let len = self.len[l];
-            let dv = vel[i + 1] - vx;
-            let w = d * wp.dot(&d) + d.cross(&dv) / len;
-            let rel = w - wp;
-            self.qd[l] = Vector2::new(child.column(0).dot(&rel), child.column(2).dot(&rel));
-            vx += w.cross(&(d * len));
-            parent = child;
-            wp = w;
-        }
+        self.whole().set_state(g, base, pts, vel);
     }
 
     /// Energy of guide `g` at its last forward kinematics: kinetic, gravitational (potential

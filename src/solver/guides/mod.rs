@@ -1,12 +1,14 @@
 //! Guide strands (Chang, Jin, Yu 2002, "A practical model for hair mutual interactions") as
 //! `--model guides`: a sparse set of guide strands, each a multibody chain in generalized
-//! coordinates ([`chain`]), held in shape by joint actuators and breakable static links
+//! coordinates ([`chain`], advanced guide by guide on the pool's threads by `advance`), held
+//! in shape by joint actuators and breakable static links
 //! ([`links`], §4.1), kept apart by triangle strips ([`strips`], §4.2), out of the body
 //! ([`body`], §3.3), with guides inserted and removed where neighbours drift apart
 //! ([`adapt`], §4.3), and every strand of the model following its nearest guides ([`dense`],
 //! §5).
 
 pub mod adapt;
+mod advance;
 pub mod body;
 pub mod chain;
 pub mod dense;
@@ -99,8 +101,8 @@ pub struct GuideSolver {
     spheres: Vec<PosedSphere>,
     /// The pose of the body's capsules and meshes (with `spheres`).
     shape_pose: Pose,
-    buf: Vec<Vector3<f64>>,
-    vbuf: Vec<Vector3<f64>>,
+    /// Scratch of the runs the guides advance in (see `advance`).
+    run_buffers: Vec<std::sync::Mutex<advance::RunBuffers>>,
     disp: Vec<Vector3<f64>>,
     last_contacts: usize,
     last_body: usize,
@@ -199,8 +201,7 @@ impl GuideSolver {
             settling: false,
             spheres: Vec::new(),
             shape_pose: Pose::identity(),
-            buf: vec![Vector3::zeros(); n + 1],
-            vbuf: vec![Vector3::zeros(); n + 1],
+            run_buffers: Vec::new(),
             disp: vec![Vector3::zeros(); cap * (n + 1)],
             last_contacts: 0,
             last_body: 0,
@@ -360,22 +361,7 @@ impl GuideSolver {
     /// the pose.
     fn base_at(&self, t: f64, h: f64) -> (Base, Pose) {
         let g = Vector3::from(self.params.gravity);
-        let (p0, p1) = if self.settling {
-            let mut p = self.motion.pose(0.0);
-            p.linear_velocity = Vector3::zeros();
-            p.angular_velocity = Vector3::zeros();
-            (p, p)
-        } else {
-            (self.motion.pose(t), self.motion.pose(t + h))
-        };
-        let v0 = spatial_velocity(&p0);
-        let acc = (spatial_velocity(&p1) - v0) / h - Vector6::new(0.0, 0.0, 0.0, g.x, g.y, g.z);
-        let base = Base {
-            rot: *p0.iso.rotation.to_rotation_matrix().matrix(),
-            vel: v0,
-            acc,
-        };
-        (base, p0)
+        advance::head_at(&self.motion, &g, self.settling, t, h)
     }
 
     fn fk_all(&mut self, base: &Base, _t: f64) {
@@ -494,82 +480,32 @@ impl GuideSolver {
         } else {
             0
         };
-        let mut pushed = 0;
-        for idx in 0..self.alive.len() {
-            let g = self.alive[idx];
-            let vr = self.chains.verts(g);
-            let root0 = pose0
-                .transform_point(&Point3::from(self.chains.root_rest[g]))
-                .coords;
-            let root1 = pose1
-                .transform_point(&Point3::from(self.chains.root_rest[g]))
-                .coords;
-            // A guide whose fastest joint would turn more than MAX_TURN in the sub-step is
-            // integrated in shorter steps (a whipped tip of a few-millimetre link turns at
-            // 10³ rad/s): the velocity-product terms of the articulated-body step are explicit,
-            // and they add energy once a joint turns by a sizeable angle per step.
-            self.chains.fk(g, &base0, &root0);
-            let mut tau = 0.0;
-            loop {
-                let left = h - tau;
-                let turn = self.chains.max_rate(g) * left;
-                if tau == 0.0 && turn <= MAX_TURN {
-                    self.chains.integrate(g, &base0, h);
-                    break;
-                }
-                let hs = if turn <= MAX_TURN {
-                    left
-                } else {
-                    (left * MAX_TURN / turn).max(h / MAX_SPLIT).min(left)
-                };
-                self.splits += 1;
-                let (b, p) = self.base_at(t + tau, hs);
-                let root = p
-                    .transform_point(&Point3::from(self.chains.root_rest[g]))
-                    .coords;
-                self.chains.fk(g, &b, &root);
-                self.chains.integrate(g, &b, hs);
-                tau += hs;
-                if tau >= h * (1.0 - 1e-9) {
-                    break;
-                }
-            }
-            self.chains.fk(g, &base1, &root1);
-            // The correction is undone in part by the way back to joint space when the pushed
-            // chain bends at a joint the way its two axes cannot follow exactly (2 mm at a tip
-            // on Long under `shake`): correct again what the joints give, a few times at most.
-            for pass in 0..CORRECTION_PASSES {
-                self.buf.copy_from_slice(&self.chains.x[vr.clone()]);
-                self.vbuf.copy_from_slice(&self.chains.v[vr.clone()]);
-                let p = body::correct(
-                    &mut self.buf,
-                    &mut self.vbuf,
-                    &self.chains.len[g * n..(g + 1) * n],
-                    &self.spheres,
-                    &body::Shapes {
-                        colliders: &self.model.colliders,
-                        pose: self.shape_pose,
-                    },
-                    self.gp.body_margin,
-                    // Friction once per sub-step, as §3.3 has it: the later passes only move.
-                    if pass == 0 {
-                        self.gp.body_friction
-                    } else {
-                        0.0
-                    },
-                );
-                if p == 0 {
-                    break;
-                }
-                if pass == 0 {
-                    pushed += p;
-                }
-                // Back to joint space (§3.3): each corrected segment direction by the smallest
-                // turn of its link, each joint's rates from the corrected vertex velocities.
-                self.chains.set_state(g, &base1, &self.buf, &self.vbuf);
-                self.chains.fk(g, &base1, &root1);
-            }
-        }
+        let sub = advance::SubStep {
+            motion: &self.motion,
+            gravity: Vector3::from(self.params.gravity),
+            settling: self.settling,
+            t,
+            h,
+            base0,
+            pose0,
+            base1,
+            pose1,
+            spheres: &self.spheres,
+            shapes: body::Shapes {
+                colliders: &self.model.colliders,
+                pose: self.shape_pose,
+            },
+            margin: self.gp.body_margin,
+            friction: self.gp.body_friction,
+        };
+        let (pushed, splits) = advance::advance_guides(
+            &mut self.chains,
+            &self.alive,
+            self.pool.as_ref(),
+            &mut self.run_buffers,
+            &sub,
+        );
+        self.splits += splits;
         self.time = t + h;
         self.pose = if self.settling {
             pose1
