@@ -443,8 +443,9 @@ impl GuideSolver {
     }
 
     /// One sub-step of length `h` from `self.time`: forces, articulated-body dynamics,
-    /// body correction.
-    fn substep(&mut self, h: f64) -> (usize, usize) {
+    /// body correction. `search`: the strips' broad phase is run here too, on this
+    /// sub-step's positions (the step has one sub-step).
+    fn substep(&mut self, h: f64, search: bool) -> (usize, usize) {
         let t = self.time;
         let (base0, _) = self.base_at(t, h);
         let (base1, pose1) = self.base_at(t + h, h);
@@ -474,7 +475,10 @@ impl GuideSolver {
                 self.gp.link_damping,
             );
         }
-        let contacts = if self.gp.collision {
+        let contacts = if self.gp.collision && search {
+            self.strips
+                .detect_apply_on(self.pool.as_ref(), &mut self.chains, &self.alive, &self.gp)
+        } else if self.gp.collision {
             self.strips
                 .apply_on(self.pool.as_ref(), &mut self.chains, &self.gp)
         } else {

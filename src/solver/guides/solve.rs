@@ -72,20 +72,21 @@ impl Solver for GuideSolver {
         if self.gp.collision {
             self.strips.update_broken(&self.chains, self.gp.strip_break);
             // Candidates within twice the contact distance cover the hair's motion over the
-            // step's later sub-steps; with one sub-step the contacts are evaluated on the very
-            // positions searched here, and the contact distance itself (with a rounding
-            // slack) finds every contact with fewer candidates.
-            let reach = if sub == 1 {
-                self.gp.contact_distance * (1.0 + 1e-6)
-            } else {
-                2.0 * self.gp.contact_distance
-            };
-            self.strips
-                .detect_on(self.pool.as_ref(), &self.chains, &self.alive, reach);
+            // step's later sub-steps. With one sub-step the contacts are evaluated on the very
+            // positions searched, so the sub-step searches and evaluates at once, within the
+            // contact distance itself (`Strips::detect_apply_on`).
+            if sub > 1 {
+                self.strips.detect_on(
+                    self.pool.as_ref(),
+                    &self.chains,
+                    &self.alive,
+                    2.0 * self.gp.contact_distance,
+                );
+            }
         }
         let splits0 = self.splits;
         for _ in 0..sub {
-            let (c, b) = self.substep(h);
+            let (c, b) = self.substep(h, sub == 1);
             contacts += c;
             body += b;
         }

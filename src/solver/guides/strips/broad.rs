@@ -23,11 +23,34 @@ impl Strips {
     /// the sub-steps' exact test then turns down.
     pub fn detect_on(&mut self, pool: Option<&Pool>, chains: &Chains, alive: &[usize], reach: f64) {
         let n = chains.n;
-        let h = chains.len.iter().cloned().fold(0.0, f64::max) + 2.0 * reach;
-        self.entries.clear();
         self.seg_pairs.clear();
         self.vt_pairs.clear();
         fill_tangents(chains, alive, &mut self.tangents);
+        self.prepare(pool, chains, alive, reach);
+        let this = &*self;
+        for_each_on(pool, CHUNKS, &|c| {
+            let mut guard = this.chunks[c].lock().unwrap_or_else(|e| e.into_inner());
+            let chunk = &mut *guard;
+            chunk.seg.clear();
+            chunk.vt.clear();
+            this.seg_piece(c, n, &mut chunk.seg);
+            this.tri_piece(c, chains, reach, &mut chunk.vt);
+        });
+        self.gather(chains.x.len());
+    }
+
+    /// The broad phase's set-up on the threads of `pool`: every segment's box, direction and
+    /// grid cells, and the vertices' grid (the tangents already filled).
+    pub(super) fn prepare(
+        &mut self,
+        pool: Option<&Pool>,
+        chains: &Chains,
+        alive: &[usize],
+        reach: f64,
+    ) {
+        let n = chains.n;
+        let h = chains.len.iter().cloned().fold(0.0, f64::max) + 2.0 * reach;
+        self.entries.clear();
         let links = chains.len.len();
         self.seg_box
             .resize(links, (Vector3::zeros(), Vector3::zeros()));
@@ -86,15 +109,11 @@ impl Strips {
         if self.chunks.len() != CHUNKS {
             self.chunks = (0..CHUNKS).map(|_| Mutex::default()).collect();
         }
-        let this = &*self;
-        for_each_on(pool, CHUNKS, &|c| {
-            let mut guard = this.chunks[c].lock().unwrap_or_else(|e| e.into_inner());
-            let chunk = &mut *guard;
-            chunk.seg.clear();
-            chunk.vt.clear();
-            this.seg_piece(c, n, &mut chunk.seg);
-            this.tri_piece(c, chains, reach, &mut chunk.vt);
-        });
+    }
+
+    /// Joins the pieces' candidates: the segment pairs in piece order, the vertex–triangle
+    /// pairs grouped by triangle. `verts`: the chains' vertex count.
+    fn gather(&mut self, verts: usize) {
         let mut chunks = std::mem::take(&mut self.chunks);
         for m in &mut chunks {
             let chunk = m.get_mut().unwrap_or_else(|e| e.into_inner());
@@ -104,7 +123,6 @@ impl Strips {
         // vertex-by-vertex search, in which a sub-step adds their forces, whatever the cells
         // made of it): two counting sorts, by vertex and then, keeping that order, by triangle
         // (6,000 small sorts of each triangle's vertices cost a tenth of the broad phase).
-        let verts = chains.x.len();
         let mut by_vertex = std::mem::take(&mut self.vt_pairs);
         let mut cursor = std::mem::take(&mut self.cursor);
         cursor.clear();
@@ -145,6 +163,7 @@ impl Strips {
             self.tri_verts[cursor[t as usize] as usize] = v;
             cursor[t as usize] += 1;
         }
+        self.found = self.seg_pairs.len() + found;
         self.vt_pairs = by_vertex;
         self.cursor = cursor;
         self.chunks = chunks;
@@ -153,7 +172,7 @@ impl Strips {
     /// Piece `c` of the segment pairs: the cells whose runs start in its share of the sorted
     /// entries. Each pair is tested in the one cell holding the low corner of their boxes'
     /// overlap.
-    fn seg_piece(&self, c: usize, n: usize, out: &mut Vec<(u32, u32)>) {
+    pub(super) fn seg_piece(&self, c: usize, n: usize, out: &mut Vec<(u32, u32)>) {
         let entries = &self.entries;
         let run_start = |i: usize| {
             let mut i = i.min(entries.len());

@@ -29,6 +29,72 @@ impl Strips {
             this.tri_contacts(c, ch, p, chunk);
             this.seg_contacts(c, ch, p, chunk);
         });
+        self.add_forces(chains)
+    }
+
+    /// The broad phase and the contacts of a step of one sub-step at once: the candidates are
+    /// searched within the contact distance (with a rounding slack) on the very positions the
+    /// contacts are evaluated on, so each piece evaluates its candidates as it finds them
+    /// instead of listing them for [`Strips::apply_on`]: the same contacts, their forces added
+    /// in the same order, bit for bit, as [`Strips::detect_on`] then [`Strips::apply_on`]
+    /// with that reach. Returns how many are in contact.
+    pub fn detect_apply_on(
+        &mut self,
+        pool: Option<&Pool>,
+        chains: &mut Chains,
+        alive: &[usize],
+        p: &GuideParams,
+    ) -> usize {
+        let reach = p.contact_distance * (1.0 + 1e-6);
+        let n = chains.n;
+        fill_all_tangents(chains, &mut self.tangents);
+        self.prepare(pool, chains, alive, reach);
+        self.seg_pairs.clear();
+        self.vt_pairs.clear();
+        self.tri_verts.clear();
+        self.tri_start.clear();
+        let this = &*self;
+        let ch = &*chains;
+        for_each_on(pool, CHUNKS, &|c| {
+            let mut guard = this.chunks[c].lock().unwrap_or_else(|e| e.into_inner());
+            let chunk = &mut *guard;
+            chunk.tri_hits.clear();
+            chunk.seg_hits.clear();
+            chunk.count = 0;
+            // The triangles of the piece in order, each with its vertices in index order (as
+            // the listed candidates are grouped).
+            let mut vt = std::mem::take(&mut chunk.vt);
+            let mut verts = std::mem::take(&mut chunk.verts);
+            vt.clear();
+            this.tri_piece(c, ch, reach, &mut vt);
+            for group in vt.chunk_by(|a, b| a.1 == b.1) {
+                verts.clear();
+                verts.extend(group.iter().map(|&(v, _)| v));
+                verts.sort_unstable();
+                this.triangle_hits(group[0].1 as usize, &verts, ch, p, chunk);
+            }
+            let mut seg = std::mem::take(&mut chunk.seg);
+            seg.clear();
+            this.seg_piece(c, n, &mut seg);
+            for &(la, lb) in &seg {
+                this.segment_hit(la, lb, ch, p, chunk);
+            }
+            (chunk.vt, chunk.verts, chunk.seg) = (vt, verts, seg);
+        });
+        self.found = self
+            .chunks
+            .iter_mut()
+            .map(|m| {
+                let chunk = m.get_mut().unwrap_or_else(|e| e.into_inner());
+                chunk.vt.len() + chunk.seg.len()
+            })
+            .sum();
+        self.add_forces(chains)
+    }
+
+    /// Adds the pieces' contact forces to the chains' vertex forces, contact by contact in the
+    /// order of one thread: the triangles' vertices, then the segments'. Returns the contacts.
+    fn add_forces(&self, chains: &mut Chains) -> usize {
         // The forces, contact by contact in the order of one thread: the triangles' vertices,
         // then the segments'.
         let mut count = 0;
@@ -91,12 +157,6 @@ impl Strips {
     /// Piece `c` of a sub-step's vertex–triangle contacts: the triangles holding its share of
     /// the candidates.
     fn tri_contacts(&self, c: usize, chains: &Chains, p: &GuideParams, out: &mut Chunk) {
-        let n = chains.n;
-        let dc = p.contact_distance;
-        // The bounds are exact to rounding; a relative slack keeps every pair the exact test
-        // would accept.
-        let far = dc * (1.0 + 1e-9);
-        let tangents = &self.tangents;
         let total = self.tri_verts.len() as u32;
         let first = |c: usize| {
             let k = (c * total as usize / CHUNKS) as u32;
@@ -107,120 +167,149 @@ impl Strips {
             if start == end || self.broken[t] {
                 continue;
             }
-            let tv = self.tri[t].map(|w| w as usize);
-            let tp = tv.map(|w| chains.x[w]);
-            let pre = TrianglePre::new(&tp);
-            let prism = Prism::new(&tp);
-            let lo = tp[0].inf(&tp[1]).inf(&tp[2]) - Vector3::repeat(far);
-            let hi = tp[0].sup(&tp[1]).sup(&tp[2]) + Vector3::repeat(far);
-            let tt = tv.map(|w| tangents[w]);
-            let tvel = tv.map(|w| chains.v[w]);
-            let tsoft = chains.soft[tv[0]]
-                .min(chains.soft[tv[1]])
-                .min(chains.soft[tv[2]]);
-            // The box and prism bounds of up to 32 vertices at a time without a branch (a bit
-            // mask: about half the candidates pass, which a branch per test mispredicts), then
-            // the exact test and the force of those that pass, in the same order.
-            for group in self.tri_verts[start..end].chunks(32) {
-                let mut mask = 0u32;
-                for (j, &v) in group.iter().enumerate() {
-                    let x = chains.x[v as usize];
-                    let inside = (x.x >= lo.x)
-                        & (x.y >= lo.y)
-                        & (x.z >= lo.z)
-                        & (x.x <= hi.x)
-                        & (x.y <= hi.y)
-                        & (x.z <= hi.z)
-                        & prism.near_all(&x, far);
-                    mask |= (inside as u32) << j;
+            self.triangle_hits(t, &self.tri_verts[start..end], chains, p, out);
+        }
+    }
+
+    /// The contacts of triangle `t` with its candidate vertices `verts` (in index order).
+    pub(super) fn triangle_hits(
+        &self,
+        t: usize,
+        verts: &[u32],
+        chains: &Chains,
+        p: &GuideParams,
+        out: &mut Chunk,
+    ) {
+        let n = chains.n;
+        let dc = p.contact_distance;
+        // The bounds are exact to rounding; a relative slack keeps every pair the exact test
+        // would accept.
+        let far = dc * (1.0 + 1e-9);
+        let tangents = &self.tangents;
+        let tv = self.tri[t].map(|w| w as usize);
+        let tp = tv.map(|w| chains.x[w]);
+        let pre = TrianglePre::new(&tp);
+        let prism = Prism::new(&tp);
+        let lo = tp[0].inf(&tp[1]).inf(&tp[2]) - Vector3::repeat(far);
+        let hi = tp[0].sup(&tp[1]).sup(&tp[2]) + Vector3::repeat(far);
+        let tt = tv.map(|w| tangents[w]);
+        let tvel = tv.map(|w| chains.v[w]);
+        let tsoft = chains.soft[tv[0]]
+            .min(chains.soft[tv[1]])
+            .min(chains.soft[tv[2]]);
+        // The box and prism bounds of up to 32 vertices at a time without a branch (a bit
+        // mask: about half the candidates pass, which a branch per test mispredicts), then
+        // the exact test and the force of those that pass, in the same order.
+        for group in verts.chunks(32) {
+            let mut mask = 0u32;
+            for (j, &v) in group.iter().enumerate() {
+                let x = chains.x[v as usize];
+                let inside = (x.x >= lo.x)
+                    & (x.y >= lo.y)
+                    & (x.z >= lo.z)
+                    & (x.x <= hi.x)
+                    & (x.y <= hi.y)
+                    & (x.z <= hi.z)
+                    & prism.near_all(&x, far);
+                mask |= (inside as u32) << j;
+            }
+            while mask != 0 {
+                let j = mask.trailing_zeros() as usize;
+                mask &= mask - 1;
+                let v = group[j] as usize;
+                let x = chains.x[v];
+                let (cp, bary) = pre.closest(&x);
+                let d = (x - cp).norm();
+                if d >= dc || d < 1e-9 {
+                    continue;
                 }
-                while mask != 0 {
-                    let j = mask.trailing_zeros() as usize;
-                    mask &= mask - 1;
-                    let v = group[j] as usize;
-                    let x = chains.x[v];
-                    let (cp, bary) = pre.closest(&x);
-                    let d = (x - cp).norm();
-                    if d >= dc || d < 1e-9 {
-                        continue;
-                    }
-                    out.count += 1;
-                    let nrm = (x - cp) / d;
-                    let hair = tangents[v];
-                    let mut dir = Vector3::zeros();
-                    let mut vt = Vector3::zeros();
-                    for k in 0..3 {
-                        dir += tt[k] * bary[k];
-                        vt += tvel[k] * bary[k];
-                    }
-                    let scale = orientation_scale(&hair, &dir.try_normalize(1e-12).unwrap_or(hair));
-                    let m = chains.m[link_of(v, n)];
-                    let soft = chains.soft[v].min(tsoft);
-                    let f = contact_force(chains.v[v] - vt, nrm, d, scale, m, p) * soft;
-                    let cd = damping_of(scale, m, p);
-                    out.tri_hits.push(TriHit {
-                        t: t as u32,
-                        v: v as u32,
-                        f,
-                        cd,
-                        bary,
-                    });
+                out.count += 1;
+                let nrm = (x - cp) / d;
+                let hair = tangents[v];
+                let mut dir = Vector3::zeros();
+                let mut vt = Vector3::zeros();
+                for k in 0..3 {
+                    dir += tt[k] * bary[k];
+                    vt += tvel[k] * bary[k];
                 }
+                let scale = orientation_scale(&hair, &dir.try_normalize(1e-12).unwrap_or(hair));
+                let m = chains.m[link_of(v, n)];
+                let soft = chains.soft[v].min(tsoft);
+                let f = contact_force(chains.v[v] - vt, nrm, d, scale, m, p) * soft;
+                let cd = damping_of(scale, m, p);
+                out.tri_hits.push(TriHit {
+                    t: t as u32,
+                    v: v as u32,
+                    f,
+                    cd,
+                    bary,
+                });
             }
         }
     }
 
     /// Piece `c` of a sub-step's segment–segment contacts: its share of the candidates.
     fn seg_contacts(&self, c: usize, chains: &Chains, p: &GuideParams, out: &mut Chunk) {
+        let len = self.seg_pairs.len();
+        for &(la, lb) in &self.seg_pairs[c * len / CHUNKS..(c + 1) * len / CHUNKS] {
+            self.segment_hit(la, lb, chains, p, out);
+        }
+    }
+
+    /// The contact of links `la` and `lb`, if they are in contact.
+    pub(super) fn segment_hit(
+        &self,
+        la: u32,
+        lb: u32,
+        chains: &Chains,
+        p: &GuideParams,
+        out: &mut Chunk,
+    ) {
         let n = chains.n;
         let dc = p.contact_distance;
         let far = dc * (1.0 + 1e-9);
-        let len = self.seg_pairs.len();
-        for &(la, lb) in &self.seg_pairs[c * len / CHUNKS..(c + 1) * len / CHUNKS] {
-            let (la, lb) = (la as usize, lb as usize);
-            let va = (la / n) * (n + 1) + la % n;
-            let vb = (lb / n) * (n + 1) + lb % n;
-            let (a0, a1, b0, b1) = (
-                chains.x[va],
-                chains.x[va + 1],
-                chains.x[vb],
-                chains.x[vb + 1],
-            );
-            // Every point of a segment is within half its length of its midpoint.
-            let gap = ((a0 + a1) - (b0 + b1)).norm() * 0.5;
-            if gap - 0.5 * (chains.len[la] + chains.len[lb]) > far {
-                continue;
-            }
-            let (s, t) = closest_segments(&a0, &a1, &b0, &b1);
-            let pa = a0.lerp(&a1, s);
-            let pb = b0.lerp(&b1, t);
-            let d = (pa - pb).norm();
-            if d >= dc || d < 1e-9 {
-                continue;
-            }
-            out.count += 1;
-            let nrm = (pa - pb) / d;
-            let ta = (a1 - a0) / chains.len[la];
-            let tb = (b1 - b0) / chains.len[lb];
-            let rel =
-                chains.v[va].lerp(&chains.v[va + 1], s) - chains.v[vb].lerp(&chains.v[vb + 1], t);
-            let m = chains.m[la].min(chains.m[lb]);
-            let scale = orientation_scale(&ta, &tb);
-            let soft = chains.soft[va]
-                .min(chains.soft[va + 1])
-                .min(chains.soft[vb])
-                .min(chains.soft[vb + 1]);
-            let f = contact_force(rel, nrm, d, scale, m, p) * soft;
-            let cd = damping_of(scale, m, p);
-            out.seg_hits.push(SegHit {
-                va: va as u32,
-                vb: vb as u32,
-                s,
-                t,
-                f,
-                cd,
-            });
+        let (la, lb) = (la as usize, lb as usize);
+        let va = (la / n) * (n + 1) + la % n;
+        let vb = (lb / n) * (n + 1) + lb % n;
+        let (a0, a1, b0, b1) = (
+            chains.x[va],
+            chains.x[va + 1],
+            chains.x[vb],
+            chains.x[vb + 1],
+        );
+        // Every point of a segment is within half its length of its midpoint.
+        let gap = ((a0 + a1) - (b0 + b1)).norm() * 0.5;
+        if gap - 0.5 * (chains.len[la] + chains.len[lb]) > far {
+            return;
         }
+        let (s, t) = closest_segments(&a0, &a1, &b0, &b1);
+        let pa = a0.lerp(&a1, s);
+        let pb = b0.lerp(&b1, t);
+        let d = (pa - pb).norm();
+        if d >= dc || d < 1e-9 {
+            return;
+        }
+        out.count += 1;
+        let nrm = (pa - pb) / d;
+        let ta = (a1 - a0) / chains.len[la];
+        let tb = (b1 - b0) / chains.len[lb];
+        let rel = chains.v[va].lerp(&chains.v[va + 1], s) - chains.v[vb].lerp(&chains.v[vb + 1], t);
+        let m = chains.m[la].min(chains.m[lb]);
+        let scale = orientation_scale(&ta, &tb);
+        let soft = chains.soft[va]
+            .min(chains.soft[va + 1])
+            .min(chains.soft[vb])
+            .min(chains.soft[vb + 1]);
+        let f = contact_force(rel, nrm, d, scale, m, p) * soft;
+        let cd = damping_of(scale, m, p);
+        out.seg_hits.push(SegHit {
+            va: va as u32,
+            vb: vb as u32,
+            s,
+            t,
+            f,
+            cd,
+        });
     }
 }
 

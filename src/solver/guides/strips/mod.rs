@@ -11,7 +11,9 @@
 //! The broad phase is a uniform grid, held for the segments as a sorted list of (cell, element)
 //! pairs and for the vertices as a dense counting sort, rebuilt once per step into reused
 //! buffers; candidate pairs found within twice the threshold are re-evaluated at every
-//! sub-step (within the threshold itself when a step has one sub-step).
+//! sub-step. When a step has one sub-step, the search runs within the threshold itself on that
+//! sub-step's positions and each candidate is evaluated as it is found
+//! ([`Strips::detect_apply_on`]).
 //!
 //! Both the broad phase and a sub-step's contacts are cut into [`CHUNKS`] fixed pieces of work
 //! that the threads of a [`Pool`] take in any order; each piece writes only its own lists, and
@@ -133,6 +135,8 @@ struct SegHit {
 struct Chunk {
     seg: Vec<(u32, u32)>,
     vt: Vec<(u32, u32)>,
+    /// A triangle's candidate vertices, sorted (the fused search of one sub-step).
+    verts: Vec<u32>,
     tri_hits: Vec<TriHit>,
     seg_hits: Vec<SegHit>,
     count: usize,
@@ -159,6 +163,8 @@ pub struct Strips {
     vt_pairs: Vec<(u32, u32)>,
     tri_start: Vec<u32>,
     tri_verts: Vec<u32>,
+    /// Candidate pairs of the last broad phase, listed or evaluated as found.
+    found: usize,
     cursor: Vec<u32>,
     /// Per chain vertex: hair direction ([`tangent`]), refreshed by `detect` and `apply`.
     tangents: Vec<Vector3<f64>>,
@@ -280,7 +286,7 @@ impl Strips {
 
     /// Number of candidate pairs of the last broad phase.
     pub fn candidates(&self) -> usize {
-        self.seg_pairs.len() + self.tri_verts.len()
+        self.found
     }
 
     /// Bytes held by the reused buffers.
@@ -301,6 +307,7 @@ impl Strips {
                 .map(|m| {
                     let c = m.lock().unwrap_or_else(|e| e.into_inner());
                     (c.seg.capacity() + c.vt.capacity()) * 8
+                        + c.verts.capacity() * 4
                         + c.tri_hits.capacity() * std::mem::size_of::<TriHit>()
                         + c.seg_hits.capacity() * std::mem::size_of::<SegHit>()
                 })

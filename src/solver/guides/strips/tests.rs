@@ -235,3 +235,36 @@ fn two_threads_give_the_same_candidates_and_forces() {
         assert_eq!(bits(&ca), bits(&cb), "seed {seed}");
     }
 }
+
+/// A step of one sub-step searches and evaluates at once: the same contacts and forces, bit
+/// for bit, as the broad phase within the contact distance followed by the contacts, on one
+/// thread or two.
+#[test]
+fn searching_while_evaluating_gives_the_same_forces() {
+    let pool = Pool::new(2).unwrap();
+    let p = GuideParams {
+        contact_distance: 0.008,
+        ..GuideParams::default()
+    };
+    for seed in 1..4 {
+        let (c, mut listed) = tangle(seed, 16, 8);
+        let alive: Vec<usize> = (0..16).collect();
+        listed.detect_on(None, &c, &alive, p.contact_distance * (1.0 + 1e-6));
+        let mut ca = c.clone();
+        let na = listed.apply_on(None, &mut ca, &p);
+        assert!(na > 10, "seed {seed}: {na} contacts");
+        for pool in [None, Some(&pool)] {
+            let (_, mut fused) = tangle(seed, 16, 8);
+            let mut cb = c.clone();
+            let nb = fused.detect_apply_on(pool, &mut cb, &alive, &p);
+            assert_eq!(na, nb, "seed {seed}");
+            assert_eq!(listed.candidates(), fused.candidates(), "seed {seed}");
+            let bits = |c: &Chains| {
+                let f = c.f.iter().flat_map(|v| v.iter().map(|x| x.to_bits()));
+                f.chain(c.damp.iter().map(|x| x.to_bits()))
+                    .collect::<Vec<u64>>()
+            };
+            assert_eq!(bits(&ca), bits(&cb), "seed {seed}");
+        }
+    }
+}
