@@ -367,6 +367,21 @@ impl Prism {
         }
     }
 
+    /// The four planes in `f32` (normal x, y, z, offset: the triangle's plane, then its three
+    /// edges' planes), for tests in lanes; all zero for a flat prism, which every point passes.
+    pub(super) fn planes_f32(&self) -> [[f32; 4]; 4] {
+        if self.flat {
+            return [[0.0; 4]; 4];
+        }
+        let plane = |n: &Vector3<f64>, d: f64| [n.x as f32, n.y as f32, n.z as f32, d as f32];
+        [
+            plane(&self.n, self.d),
+            plane(&self.e[0], self.c[0]),
+            plane(&self.e[1], self.c[1]),
+            plane(&self.e[2], self.c[2]),
+        ]
+    }
+
     /// [`Prism::near`] with every test evaluated (no branch), the same answer.
     #[inline]
     pub(super) fn near_all(&self, x: &Vector3<f64>, r: f64) -> bool {

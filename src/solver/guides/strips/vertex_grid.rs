@@ -183,7 +183,20 @@ impl Strips {
                 f32_up(hi.z),
             ];
             let [ga, gb] = self.tri_guides[t];
-            let mut prism = None;
+            let prism = Prism::new(&tp);
+            // The prism in `f32` decides in lanes the vertices clearly inside or clearly
+            // outside it; those within `slack` of a plane are tested again in `f64`. The slack
+            // bounds the rounding of coordinates up to `size` from the origin to `f32`.
+            let size = lo.abs().max().max(hi.abs().max());
+            let slack = 4e-6 * (1.0 + size);
+            let lanes = Lanes {
+                bounds,
+                dir: df,
+                guides: [ga, gb],
+                planes: prism.planes_f32(),
+                outside: f32_up(far + slack),
+                inside: f32_down(far - slack),
+            };
             let (ka, kb) = (grid.clamp(ca), grid.clamp(cb));
             for x in ka[0]..=kb[0] {
                 for y in ka[1]..=kb[1] {
@@ -192,14 +205,15 @@ impl Strips {
                     let e = grid.start[grid.dense([x, y, kb[2]]) as usize + 1] as usize;
                     let mut i = s;
                     while i < e {
-                        let mut mask = keep8(grid, i, &bounds, &df, ga, gb) & tail_mask(e - i);
+                        let (maybe, sure) = keep8(grid, i, &lanes);
+                        let mut mask = maybe & tail_mask(e - i);
                         while mask != 0 {
                             let j = mask.trailing_zeros() as usize;
                             mask &= mask - 1;
                             let v = grid.vertex[i + j] as usize;
-                            let x = chains.x[v];
-                            if self.tangents[v].cross(&dir).norm_squared() < min2
-                                || !prism.get_or_insert_with(|| Prism::new(&tp)).near(&x, far)
+                            if sure & (1 << j) == 0
+                                && (self.tangents[v].cross(&dir).norm_squared() < min2
+                                    || !prism.near(&chains.x[v], far))
                             {
                                 continue;
                             }
@@ -213,13 +227,31 @@ impl Strips {
     }
 }
 
-/// Which of the eight sorted vertices `i..i + 8` of `grid` lie in the box `b` (low x, y, z,
-/// high x, y, z; `f32` rounded outwards), are on neither guide `ga` nor `gb` and may cross
-/// direction `d` by [`MIN_CROSSING`] or more, as bits: written over fixed arrays of eight
-/// without a branch so that the compiler makes vector compares of it on any target. A vertex
-/// turned down here is surely turned down by the exact `f64` tests.
+/// A triangle's tests in lanes: its box grown by the reach (low x, y, z, high x, y, z; `f32`
+/// rounded outwards), hair direction, the guides of its sides, and its prism's planes with
+/// the distances beyond which a vertex is surely outside and below which surely inside.
+struct Lanes {
+    bounds: [f32; 6],
+    dir: [f32; 3],
+    guides: [u32; 2],
+    planes: [[f32; 4]; 4],
+    outside: f32,
+    inside: f32,
+}
+
+/// Above this squared crossing in `f32`, a pair is surely at or above [`MIN_CROSSING`] squared
+/// in `f64` (see [`MIN_CROSSING2_F32`]).
+const SURE_CROSSING2_F32: f32 = (MIN_CROSSING * MIN_CROSSING + 1e-4) as f32;
+
+/// Which of the eight sorted vertices `i..i + 8` of `grid` may be candidates of the
+/// triangle of `l`, and which of those surely are, as bits. A candidate lies in the box, is
+/// on neither guide, may cross the triangle's direction by [`MIN_CROSSING`] or more and is
+/// not surely outside the prism; it surely is one when it surely crosses and is surely inside
+/// the prism. Written over fixed arrays of eight without a branch so that the compiler makes
+/// vector compares of it on any target. A vertex turned down here is surely turned down by the
+/// exact `f64` tests, and one surely kept is surely kept by them.
 #[inline(always)]
-fn keep8(grid: &VertexGrid, i: usize, b: &[f32; 6], d: &[f32; 3], ga: u32, gb: u32) -> u32 {
+fn keep8(grid: &VertexGrid, i: usize, l: &Lanes) -> (u32, u32) {
     fn lane(v: &[f32], i: usize) -> &[f32; 8] {
         v[i..i + 8]
             .try_into()
@@ -238,25 +270,34 @@ fn keep8(grid: &VertexGrid, i: usize, b: &[f32; 6], d: &[f32; 3], ga: u32, gb: u
     let g: &[u32; 8] = grid.guide[i..i + 8]
         .try_into()
         .expect("eight entries past every index");
-    let mut keep = [0u32; 8];
+    let (b, d, p) = (&l.bounds, &l.dir, &l.planes);
+    let mut maybe = [0u32; 8];
+    let mut sure = [0u32; 8];
     for j in 0..8 {
         let cx = hy[j] * d[2] - hz[j] * d[1];
         let cy = hz[j] * d[0] - hx[j] * d[2];
         let cz = hx[j] * d[1] - hy[j] * d[0];
         let c2 = cx * cx + cy * cy + cz * cz;
-        keep[j] = ((x[j] >= b[0])
+        let dist = |k: usize| p[k][0] * x[j] + p[k][1] * y[j] + p[k][2] * z[j] - p[k][3];
+        let (d0, d1, d2, d3) = (dist(0).abs(), dist(1), dist(2), dist(3));
+        let out = (d0 >= l.outside) | (d1 >= l.outside) | (d2 >= l.outside) | (d3 >= l.outside);
+        let inside = (d0 < l.inside) & (d1 < l.inside) & (d2 < l.inside) & (d3 < l.inside);
+        maybe[j] = ((x[j] >= b[0])
             & (y[j] >= b[1])
             & (z[j] >= b[2])
             & (x[j] <= b[3])
             & (y[j] <= b[4])
             & (z[j] <= b[5])
-            & (g[j] != ga)
-            & (g[j] != gb)
-            & (c2 >= MIN_CROSSING2_F32)) as u32;
+            & (g[j] != l.guides[0])
+            & (g[j] != l.guides[1])
+            & (c2 >= MIN_CROSSING2_F32)
+            & !out) as u32;
+        sure[j] = ((c2 >= SURE_CROSSING2_F32) & inside) as u32;
     }
-    let mut mask = 0;
-    for (j, k) in keep.iter().enumerate() {
-        mask |= k << j;
+    let (mut m, mut s) = (0, 0);
+    for j in 0..8 {
+        m |= maybe[j] << j;
+        s |= sure[j] << j;
     }
-    mask
+    (m, s)
 }
