@@ -70,6 +70,8 @@ pub struct HairCollider {
     pub(super) part_force: Vec<Vector3<f64>>,
     /// Per node slot: 1 / mass, then the friction scale (scratch of [`Response`]).
     pub(super) inv_mass: Vec<f64>,
+    /// Per segment: its slots and scales, for the response.
+    pub(super) seg_scale: Vec<SegScale>,
     pub(super) threads: usize,
     pub(super) pool: Option<Pool>,
     /// Contacts the helper thread found in the last call.
@@ -124,6 +126,7 @@ impl HairCollider {
             chunk_loads: Vec::with_capacity(CHUNKS * nodes),
             part_force: Vec::with_capacity(PARTS * nodes),
             inv_mass: Vec::with_capacity(nodes),
+            seg_scale: Vec::with_capacity(segments),
             threads: 1,
             pool: None,
             helper_contacts: 0,
@@ -190,6 +193,7 @@ impl HairCollider {
             + (self.load.capacity() + self.inv_mass.capacity() + self.chunk_loads.capacity()) * 8
             + self.part_force.capacity() * std::mem::size_of::<Vector3<f64>>()
             + b.inv_mass.capacity() * 8
+            + self.seg_scale.capacity() * std::mem::size_of::<SegScale>()
     }
 
     /// Adds the hair–hair friction and repulsion forces to `force` (indexed by slot).
@@ -296,7 +300,14 @@ impl HairCollider {
         response.add_loads(&loads);
         let total: usize = lists.iter().map(|l| l.len()).sum();
         let pool = pool.filter(|_| total >= self.min_contacts_to_share);
-        response.apply_parts(&lists, segs, p, &mut self.part_force, pool, force);
+        response.apply_parts(
+            &lists,
+            segs,
+            p,
+            (&mut self.part_force, &mut self.seg_scale),
+            pool,
+            force,
+        );
         stats
     }
 }
