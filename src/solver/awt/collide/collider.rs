@@ -112,6 +112,7 @@ impl HairCollider {
             items: Vec::with_capacity(ITEMS_PER_SEGMENT * segments),
             grid: GridInfo::default(),
             inv_mass: Vec::with_capacity(nodes),
+            ends: Vec::with_capacity(segments),
         };
         let out = || {
             Mutex::new(WorkerOut {
@@ -193,6 +194,7 @@ impl HairCollider {
             + (self.load.capacity() + self.inv_mass.capacity() + self.chunk_loads.capacity()) * 8
             + self.part_force.capacity() * std::mem::size_of::<Vector3<f64>>()
             + b.inv_mass.capacity() * 8
+            + b.ends.capacity() * std::mem::size_of::<SegEnds>()
             + self.seg_scale.capacity() * std::mem::size_of::<SegScale>()
     }
 
@@ -227,6 +229,16 @@ impl HairCollider {
             for i in 0..n {
                 b.inv_mass[segs.child[i] as usize] = 1.0 / segs.child_mass[i];
             }
+            b.ends.clear();
+            b.ends.extend((0..n).map(|i| {
+                let (parent, child) = (segs.parent[i], segs.child[i]);
+                SegEnds {
+                    parent,
+                    child,
+                    inv_parent: b.inv_mass[parent as usize],
+                    inv_child: b.inv_mass[child as usize],
+                }
+            }));
         }
         let eps2 = p.epsilon * p.epsilon;
         let broad = &self.broad;
