@@ -2,7 +2,9 @@
 //! quieter instrument than whole steps on a shared machine (the best of 10 batches of 5 calls
 //! per state, averaged over 6 states along 3 s of `lean`).
 //!
-//! `cargo run --release --example interactions -- [short long …] [--threads 2] [-v]`
+//! `cargo run --release --example interactions -- [short long …] [--threads 2] [-v]
+//! [--motion shake] [--split 0.05]` (the motion and the split threshold default to `lean` and
+//! the style's own).
 
 use std::path::Path;
 use std::sync::Arc;
@@ -16,11 +18,14 @@ use wisptree::solver::awt::{Simulation, StepReport};
 fn main() -> anyhow::Result<()> {
     let mut styles = Vec::new();
     let (mut threads, mut verbose) = (1, false);
+    let (mut motion_name, mut split) = ("lean".to_owned(), None::<f64>);
     let mut args = std::env::args().skip(1);
     while let Some(a) = args.next() {
         match a.as_str() {
             "--threads" => threads = args.next().unwrap_or_default().parse()?,
             "-v" => verbose = true,
+            "--motion" => motion_name = args.next().unwrap_or_default(),
+            "--split" => split = Some(args.next().unwrap_or_default().parse()?),
             _ => styles.push(a),
         }
     }
@@ -29,11 +34,14 @@ fn main() -> anyhow::Result<()> {
     }
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("styles");
     for style in styles {
-        let (loaded, model) = wisptree::scene::load_model(
+        let (mut loaded, model) = wisptree::scene::load_model(
             &wisptree::style::builtin::StyleSource::File(dir.join(format!("{style}.ron"))),
         )?;
+        if let Some(v) = split {
+            loaded.style.sim.split_threshold = v;
+        }
         let model = Arc::new(model);
-        let motion = Motion::parse("lean", Point3::from(model.scalp_center))?;
+        let motion = Motion::parse(&motion_name, Point3::from(model.scalp_center))?;
         let mut sim = Simulation::from_style(model, &loaded.style, motion, false);
         let mut report = StepReport::default();
         let mut collider = HairCollider::new();

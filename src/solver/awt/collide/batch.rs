@@ -7,6 +7,16 @@ use crate::simd::pairs::{self, PairBatch, PairOut, PairParams, BATCH};
 
 use super::*;
 
+/// One segment's node slots and their `1 / mass` (see [`Broad`]), for the loads of its
+/// contacts.
+#[derive(Clone, Copy, Default)]
+pub(super) struct SegEnds {
+    pub(super) parent: u32,
+    pub(super) child: u32,
+    pub(super) inv_parent: f64,
+    pub(super) inv_child: f64,
+}
+
 /// Queued pairs and the lanes' results; lives on the searching thread's stack (about 20 kB).
 ///
 /// Each contact found also adds its shares to the per-node loads of [`Response`] at once,
@@ -17,25 +27,21 @@ pub(super) struct Batched<'a> {
     out: PairOut,
     /// The pairs of the lanes, as indices into the per-segment data.
     ids: [(u32, u32); BATCH],
-    /// The node slots of the pairs: parent and child of the first segment, then of the
-    /// second (for the loads, without going back to the per-segment data).
-    slots: [[u32; 4]; BATCH],
     params: PairParams,
     /// Per node slot: 1 / mass (see [`Broad`]).
-    inv_mass: &'a [f64],
+    ends: &'a [SegEnds],
     /// Per node slot: the loads of this search's contacts.
     loads: &'a mut [f64],
 }
 
 impl<'a> Batched<'a> {
-    pub(super) fn new(p: &ContactParams, inv_mass: &'a [f64], loads: &'a mut [f64]) -> Self {
+    pub(super) fn new(p: &ContactParams, ends: &'a [SegEnds], loads: &'a mut [f64]) -> Self {
         Batched {
-            inv_mass,
+            ends,
             loads,
             lanes: PairBatch::default(),
             out: PairOut::default(),
             ids: [(0, 0); BATCH],
-            slots: [[0; 4]; BATCH],
             params: PairParams {
                 friction: p.friction,
                 repulsion: p.repulsion,
@@ -56,10 +62,8 @@ impl<'a> Batched<'a> {
         p: &ContactParams,
         out: &mut Vec<Contact>,
     ) {
-        let (ba, bb) = (&boxes[a], &boxes[b]);
         let i = self.lanes.len();
         self.ids[i] = (a as u32, b as u32);
-        self.slots[i] = [ba.parent, ba.child, bb.parent, bb.child];
         if self.lanes.push(&pre[a].lane, &pre[b].lane) {
             self.flush((boxes, pre), p, out);
         }
@@ -83,14 +87,15 @@ impl<'a> Batched<'a> {
 
     /// Adds a contact's shares to the loads of its four nodes ([`Response::record`]).
     #[inline(always)]
-    fn record(&mut self, slots: [u32; 4], m: f64, s: f64, t: f64) {
-        for (n, share) in [
-            (slots[0], 1.0 - s),
-            (slots[1], s),
-            (slots[2], 1.0 - t),
-            (slots[3], t),
+    fn record(&mut self, (a, b): (u32, u32), m: f64, s: f64, t: f64) {
+        let (ea, eb) = (self.ends[a as usize], self.ends[b as usize]);
+        for (n, share, inv_mass) in [
+            (ea.parent, 1.0 - s, ea.inv_parent),
+            (ea.child, s, ea.inv_child),
+            (eb.parent, 1.0 - t, eb.inv_parent),
+            (eb.child, t, eb.inv_child),
         ] {
-            self.loads[n as usize] += share * m * self.inv_mass[n as usize];
+            self.loads[n as usize] += share * m * inv_mass;
         }
     }
 
@@ -125,7 +130,7 @@ impl<'a> Batched<'a> {
             };
             // The lighter child's mass, as `Response::record` takes it.
             let m = self.lanes.a.mass[i].min(self.lanes.b.mass[i]);
-            self.record(self.slots[i], m, c.s, c.t);
+            self.record((a, b), m, c.s, c.t);
             out.push(c);
         }
     }
@@ -145,12 +150,6 @@ impl<'a> Batched<'a> {
             for &(a, b) in chunk {
                 let i = self.lanes.len();
                 self.ids[i] = (a as u32, b as u32);
-                self.slots[i] = [
-                    boxes[a].parent,
-                    boxes[a].child,
-                    boxes[b].parent,
-                    boxes[b].child,
-                ];
                 self.lanes.push(&pre[a].lane, &pre[b].lane);
             }
             pairs::narrow_on(level, &self.lanes, &self.params, &mut self.out);
@@ -275,6 +274,19 @@ mod tests {
             .collect()
     }
 
+    /// The boxes' node slots, every node of mass 1.
+    fn ends_of(boxes: &[SegBox]) -> Vec<SegEnds> {
+        boxes
+            .iter()
+            .map(|b| SegEnds {
+                parent: b.parent,
+                child: b.child,
+                inv_parent: 1.0,
+                inv_child: 1.0,
+            })
+            .collect()
+    }
+
     fn bits(c: &Contact) -> [u64; 10] {
         let f = c.friction.map(|x| u64::from(x.to_bits()));
         let r = c.repulsion.map(|x| u64::from(x.to_bits()));
@@ -318,10 +330,10 @@ mod tests {
                 levels.push(crate::simd::best_available());
             }
             let boxes = boxes_of(&pre);
-            let inv_mass = vec![1.0; 2 * pre.len()];
+            let ends = ends_of(&boxes);
             for level in levels {
                 let mut loads = vec![0.0; 2 * pre.len()];
-                let mut b = Batched::new(&p, &inv_mass, &mut loads);
+                let mut b = Batched::new(&p, &ends, &mut loads);
                 let mut out = Vec::new();
                 b.run_on(level, (&boxes, &pre), &idx, &p, &mut out);
                 assert_eq!(out.len(), scalar.len(), "{level:?}, thr {thr}");
@@ -344,8 +356,8 @@ mod tests {
             epsilon: 0.0,
             dt: 0.01,
         };
-        let (inv_mass, mut loads) = (vec![1.0; 2 * pre.len()], vec![0.0; 2 * pre.len()]);
-        let mut b = Batched::new(&p, &inv_mass, &mut loads);
+        let (ends, mut loads) = (ends_of(&boxes_of(&pre)), vec![0.0; 2 * pre.len()]);
+        let mut b = Batched::new(&p, &ends, &mut loads);
         let (mut rare, mut total) = (0, 0);
         for chunk in (0..4_096).collect::<Vec<_>>().chunks(BATCH) {
             for &k in chunk {

@@ -70,6 +70,8 @@ pub struct HairCollider {
     pub(super) part_force: Vec<Vector3<f64>>,
     /// Per node slot: 1 / mass, then the friction scale (scratch of [`Response`]).
     pub(super) inv_mass: Vec<f64>,
+    /// Per segment: its slots and scales, for the response.
+    pub(super) seg_scale: Vec<SegScale>,
     pub(super) threads: usize,
     pub(super) pool: Option<Pool>,
     /// Contacts the helper thread found in the last call.
@@ -110,6 +112,7 @@ impl HairCollider {
             items: Vec::with_capacity(ITEMS_PER_SEGMENT * segments),
             grid: GridInfo::default(),
             inv_mass: Vec::with_capacity(nodes),
+            ends: Vec::with_capacity(segments),
         };
         let out = || {
             Mutex::new(WorkerOut {
@@ -124,6 +127,7 @@ impl HairCollider {
             chunk_loads: Vec::with_capacity(CHUNKS * nodes),
             part_force: Vec::with_capacity(PARTS * nodes),
             inv_mass: Vec::with_capacity(nodes),
+            seg_scale: Vec::with_capacity(segments),
             threads: 1,
             pool: None,
             helper_contacts: 0,
@@ -190,6 +194,8 @@ impl HairCollider {
             + (self.load.capacity() + self.inv_mass.capacity() + self.chunk_loads.capacity()) * 8
             + self.part_force.capacity() * std::mem::size_of::<Vector3<f64>>()
             + b.inv_mass.capacity() * 8
+            + b.ends.capacity() * std::mem::size_of::<SegEnds>()
+            + self.seg_scale.capacity() * std::mem::size_of::<SegScale>()
     }
 
     /// Adds the hair–hair friction and repulsion forces to `force` (indexed by slot).
@@ -223,6 +229,16 @@ impl HairCollider {
             for i in 0..n {
                 b.inv_mass[segs.child[i] as usize] = 1.0 / segs.child_mass[i];
             }
+            b.ends.clear();
+            b.ends.extend((0..n).map(|i| {
+                let (parent, child) = (segs.parent[i], segs.child[i]);
+                SegEnds {
+                    parent,
+                    child,
+                    inv_parent: b.inv_mass[parent as usize],
+                    inv_child: b.inv_mass[child as usize],
+                }
+            }));
         }
         let eps2 = p.epsilon * p.epsilon;
         let broad = &self.broad;
@@ -296,7 +312,14 @@ impl HairCollider {
         response.add_loads(&loads);
         let total: usize = lists.iter().map(|l| l.len()).sum();
         let pool = pool.filter(|_| total >= self.min_contacts_to_share);
-        response.apply_parts(&lists, segs, p, &mut self.part_force, pool, force);
+        response.apply_parts(
+            &lists,
+            segs,
+            p,
+            (&mut self.part_force, &mut self.seg_scale),
+            pool,
+            force,
+        );
         stats
     }
 }

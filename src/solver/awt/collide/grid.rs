@@ -82,6 +82,8 @@ pub(super) struct Broad {
     /// Per node slot: 1 / its mass as a child, 0 for a kinematic root (as [`Response`] has it),
     /// for the loads the search records.
     pub(super) inv_mass: Vec<f64>,
+    /// Per segment: its node slots and their entries of `inv_mass`.
+    pub(super) ends: Vec<SegEnds>,
 }
 
 /// Below this many segments the pair search stays on one thread (the hand-over costs more).
@@ -104,7 +106,7 @@ impl Broad {
         let items = &self.items[..];
         let starts = &self.cell_start[..];
         let before = out.len();
-        let mut batched = Batched::new(p, &self.inv_mass, loads);
+        let mut batched = Batched::new(p, &self.ends, loads);
         const INDEX: u32 = (1 << MASK_SHIFT) - 1;
         for c in cells {
             let cell = &items[starts[c] as usize..starts[c + 1] as usize];

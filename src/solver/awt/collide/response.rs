@@ -116,12 +116,13 @@ impl<'a> Response<'a> {
     /// of equal length, each summed into its own buffer in `part_force` (on `pool` when there
     /// is one), and the buffers added to `force` in part order. The cut depends only on the
     /// number of contacts, so the sums are the same bit for bit with or without the pool.
+    /// `seg_scale` is scratch for the segments' [`SegScale`]s.
     pub(super) fn apply_parts(
         mut self,
         lists: &[&[Contact]; CHUNKS],
         segs: &SegmentsView,
         p: &ContactParams,
-        part_force: &mut Vec<Vector3<f64>>,
+        (part_force, seg_scale): (&mut Vec<Vector3<f64>>, &mut Vec<SegScale>),
         pool: Option<&crate::par::Pool>,
         force: &mut [Vector3<f64>],
     ) {
@@ -131,6 +132,18 @@ impl<'a> Response<'a> {
         part_force.resize(PARTS * nodes, Vector3::zeros());
         let total: usize = lists.iter().map(|l| l.len()).sum();
         let (fric, rep) = (&self.inv_mass[..], &self.load[..]);
+        seg_scale.clear();
+        seg_scale.extend((0..segs.len()).map(|i| {
+            let (parent, child) = (segs.parent[i], segs.child[i]);
+            let (pi, ci) = (parent as usize, child as usize);
+            SegScale {
+                parent,
+                child,
+                fric: fric[pi].min(fric[ci]),
+                rep: rep[pi].min(rep[ci]),
+            }
+        }));
+        let seg_scale = &seg_scale[..];
         {
             let parts = crate::par::split_parts::<_, PARTS>(part_force, |k| (k + 1) * nodes);
             let run = |k: usize| {
@@ -142,7 +155,7 @@ impl<'a> Response<'a> {
                     let (lo, hi) = (from.max(at), to.min(at + l.len()));
                     if lo < hi {
                         for c in &l[lo - at..hi - at] {
-                            add_contact(c, segs, fric, rep, f);
+                            add_contact_scaled(c, seg_scale, f);
                         }
                     }
                     at += l.len();
@@ -174,6 +187,35 @@ fn add_contact(
     let rs = rep[pa].min(rep[ca]).min(rep[pb]).min(rep[cb]);
     let f = widen(c.friction) * fs + widen(c.repulsion) * rs;
     // Eq. 3: F at P = (1 − s)·N_p + s·N_c goes (1 − s)·F to the parent, s·F to the child.
+    let fa_child = f * c.s;
+    force[pa] += f - fa_child;
+    force[ca] += fa_child;
+    let fb_child = f * c.t;
+    force[pb] -= f - fb_child;
+    force[cb] -= fb_child;
+}
+
+/// One segment's node slots and the smaller of its two nodes' friction and repulsion scales,
+/// gathered once per step: a contact then reads two of these instead of four slots and eight
+/// scales (`min` is exact, so the pair's scale is the same bit for bit).
+#[derive(Clone, Copy, Default)]
+pub(super) struct SegScale {
+    parent: u32,
+    child: u32,
+    fric: f64,
+    rep: f64,
+}
+
+/// [`add_contact`] with the scales of [`SegScale`].
+#[inline(always)]
+fn add_contact_scaled(c: &Contact, seg_scale: &[SegScale], force: &mut [Vector3<f64>]) {
+    let (sa, sb) = (&seg_scale[c.a as usize], &seg_scale[c.b as usize]);
+    let (pa, ca) = (sa.parent as usize, sa.child as usize);
+    let (pb, cb) = (sb.parent as usize, sb.child as usize);
+    let fs = sa.fric.min(sb.fric);
+    let rs = sa.rep.min(sb.rep);
+    let f = widen(c.friction) * fs + widen(c.repulsion) * rs;
+    // Eq. 3, as in `add_contact`.
     let fa_child = f * c.s;
     force[pa] += f - fa_child;
     force[ca] += fa_child;
