@@ -38,6 +38,11 @@ impl FrameBuilder {
         self.strands.len()
     }
 
+    /// The strands drawn (model strand indices).
+    pub fn strands(&self) -> &[u32] {
+        &self.strands
+    }
+
     /// Overwrites `f`'s geometry with the solver's current state: its primitives, the drawn
     /// strands (smoothed) and the body. Counters, events and messages are the caller's.
     pub fn fill(&mut self, solver: &mut dyn crate::solver::Solver, f: &mut Frame) {

@@ -592,6 +592,52 @@ fn same_state_on_one_thread_or_two() {
     assert!(run(1) == run(2));
 }
 
+/// A display that reads only some strands (`display_strands`) gets those strands' points
+/// exactly as when every strand is placed, frame after frame, and the unread strands are not
+/// moved.
+#[test]
+fn the_strands_read_are_placed_as_when_all_are() {
+    let mut all = solver("short", "shake", |g| g.count = 120);
+    let mut some = solver("short", "shake", |g| g.count = 120);
+    let total = all.model().strands.len();
+    let read: Vec<u32> = (0..total as u32).step_by(37).collect();
+    some.display_strands(Some(&read));
+    let (mut ra, mut rs) = (all.new_report(), some.new_report());
+    let (mut pa, mut ps) = (Vec::new(), Vec::new());
+    let unread = 1;
+    let mut unread_at_rest = Vec::new();
+    some.strand_points(unread, &mut unread_at_rest);
+    for _ in 0..5 {
+        for _ in 0..4 {
+            all.step(&mut ra);
+            some.step(&mut rs);
+        }
+        all.sync_display();
+        some.sync_display();
+        for &st in &read {
+            pa.clear();
+            ps.clear();
+            all.strand_points(st as usize, &mut pa);
+            some.strand_points(st as usize, &mut ps);
+            assert_eq!(pa, ps, "strand {st}");
+        }
+    }
+    let mut moved = Vec::new();
+    all.strand_points(unread, &mut moved);
+    ps.clear();
+    some.strand_points(unread, &mut ps);
+    assert_eq!(ps, unread_at_rest, "an unread strand was placed");
+    assert_ne!(
+        moved, unread_at_rest,
+        "strand {unread} does not move under shake"
+    );
+    some.display_strands(None);
+    some.sync_display();
+    ps.clear();
+    some.strand_points(unread, &mut ps);
+    assert_eq!(ps, moved, "every strand is placed again");
+}
+
 #[test]
 fn scene_loads_guides_and_draws_links_strips_and_stats() {
     let scene = Scene::load("long", "lean", SolverKind::Guides).unwrap();

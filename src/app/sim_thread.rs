@@ -440,6 +440,9 @@ fn make_frame(
     index: u64,
 ) {
     f.step_ms = pipeline::step_frame(&mut *st.solver, report, f);
+    // Without rendering, only the drawn strands are read: the solver may place just those.
+    let read = st.render_builder.is_none().then(|| st.builder.strands());
+    st.solver.display_strands(read);
     st.builder.fill(&mut *st.solver, f);
     match st.render_builder.as_mut() {
         Some(b) => b.fill_strands(&*st.solver, &mut f.render_strands),

@@ -266,6 +266,12 @@ pub trait Solver: Send {
     /// Call before [`Solver::draw`] and [`Solver::strand_points`].
     fn sync_display(&mut self);
 
+    /// Which strands the display will read with [`Solver::strand_points`] after the coming
+    /// [`Solver::sync_display`]s: `Some(list)`, or `None` for every strand (the default). A
+    /// solver whose strands cost work to place may place only those; reading another is then
+    /// an error of the caller (its points are stale).
+    fn display_strands(&mut self, _strands: Option<&[u32]>) {}
+
     /// Draws the model's debug primitives into `frame`: [`Frame::nodes`], [`Frame::segments`]
     /// (already cleared) and any extra primitive sets ([`Frame::primitives`]) under
     /// `/hair/<path_segment>/…`. Strands and body are drawn by the pipeline.

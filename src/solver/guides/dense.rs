@@ -162,13 +162,16 @@ impl Dense {
     }
 
     /// Recomputes every dense point. `disp(g, u)`: guide `g`'s displacement from rest in its
-    /// root frame at fractional vertex `u ∈ [0, n]`; `rot`: the head rotation; `root(s)`: the
-    /// world root of strand `s`. The strands are cut into [`PARTS`] runs that the threads of
-    /// `pool` take in any order (each point depends only on its strand: the same points on one
-    /// thread or two).
+    /// root frame at fractional vertex `u ∈ [0, n]`; `rot`: the head rotation; `root_world`:
+    /// the world root of a rest root. The strands are cut into [`PARTS`] runs that the threads
+    /// of `pool` take in any order (each point depends only on its strand: the same points on
+    /// one thread or two). With `only`, recomputes just those strands, on the calling thread
+    /// (the others keep their old points).
+    #[allow(clippy::too_many_arguments)]
     pub fn update(
         &mut self,
         pool: Option<&Pool>,
+        only: Option<&[u32]>,
         model: &HairModel,
         rot: &Matrix3<f64>,
         root_world: impl Fn(&Vector3<f64>) -> Vector3<f64> + Sync,
@@ -177,33 +180,42 @@ impl Dense {
     ) {
         let k = model.k;
         let b = self.blend;
+        let (guide, weight, frame, local) = (&self.guide, &self.weight, &self.frame, &self.local);
+        let place = |s: usize, out: &mut [Vector3<f64>]| {
+            let root = root_world(&model.strands.rest[s * k]);
+            let f = rot * frame[s];
+            for (i, p) in out.iter_mut().enumerate() {
+                let u = if k > 1 {
+                    i as f64 * n as f64 / (k - 1) as f64
+                } else {
+                    0.0
+                };
+                let mut dl = Vector3::zeros();
+                for j in 0..b {
+                    let g = guide[s * b + j];
+                    if g != u32::MAX {
+                        dl += disp(g as usize, u) * weight[s * b + j];
+                    }
+                }
+                *p = root + f * (local[s * k + i] + dl);
+            }
+        };
+        if let Some(only) = only {
+            for &s in only {
+                let s = s as usize;
+                place(s, &mut self.points[s * k..(s + 1) * k]);
+            }
+            return;
+        }
         let strands = model.strands.len();
         let first = |c: usize| c * strands / PARTS;
         let parts = split_parts::<_, PARTS>(&mut self.points, |c| first(c + 1) * k);
-        let (guide, weight, frame, local) = (&self.guide, &self.weight, &self.frame, &self.local);
         for_each_on(pool, PARTS, &|c| {
             let mut part = parts[c].lock().unwrap_or_else(|e| e.into_inner());
             let (start, points) = &mut *part;
             let s0 = *start / k.max(1);
             for (ds, out) in points.chunks_mut(k.max(1)).enumerate() {
-                let s = s0 + ds;
-                let root = root_world(&model.strands.rest[s * k]);
-                let f = rot * frame[s];
-                for (i, p) in out.iter_mut().enumerate() {
-                    let u = if k > 1 {
-                        i as f64 * n as f64 / (k - 1) as f64
-                    } else {
-                        0.0
-                    };
-                    let mut dl = Vector3::zeros();
-                    for j in 0..b {
-                        let g = guide[s * b + j];
-                        if g != u32::MAX {
-                            dl += disp(g as usize, u) * weight[s * b + j];
-                        }
-                    }
-                    *p = root + f * (local[s * k + i] + dl);
-                }
+                place(s0 + ds, out);
             }
         });
     }

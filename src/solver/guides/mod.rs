@@ -94,6 +94,8 @@ pub struct GuideSolver {
     dense: Dense,
     /// The alive guides changed since `dense` was bound to them.
     dense_stale: bool,
+    /// The only strands the display reads (`Solver::display_strands`; `None`: all).
+    shown: Option<Vec<u32>>,
     alive: Vec<usize>,
     time: f64,
     pose: Pose,
@@ -202,6 +204,7 @@ impl GuideSolver {
             spheres: Vec::new(),
             shape_pose: Pose::identity(),
             run_buffers: Vec::new(),
+            shown: None,
             disp: vec![Vector3::zeros(); cap * (n + 1)],
             last_contacts: 0,
             last_body: 0,

@@ -144,6 +144,7 @@ impl Solver for GuideSolver {
         let iso = self.pose.iso;
         self.dense.update(
             self.pool.as_ref(),
+            self.shown.as_deref(),
             &self.model,
             &rot,
             |r| iso.transform_point(&Point3::from(*r)).coords,
@@ -159,6 +160,14 @@ impl Solver for GuideSolver {
 
     fn draw(&self, frame: &mut crate::frame::Frame) {
         super::display::draw(self, frame);
+    }
+
+    fn display_strands(&mut self, strands: Option<&[u32]>) {
+        match strands {
+            None => self.shown = None,
+            Some(list) if self.shown.as_deref() != Some(list) => self.shown = Some(list.to_vec()),
+            Some(_) => {}
+        }
     }
 
     fn obstacle_spheres(&self, out: &mut Vec<(nalgebra::Vector3<f64>, f64)>) {
