@@ -27,6 +27,7 @@ use crate::stream::sink::Recording;
 use crate::style::builtin::StyleSource;
 
 use super::style_label;
+use crate::error::BadInput;
 
 /// The solvers a live user can pick on the page (single-level is the AWT's §5.2 baseline,
 /// not a live model).
@@ -144,13 +145,38 @@ pub fn live_cases(styles: usize) -> Vec<LiveCase> {
     cases
 }
 
-/// Runs the matrix: `seconds` simulated per row on `styles`, drawing `strands` strands.
+/// The rows of the matrix over `styles` whose label (see [`case_label`], with the style as
+/// `--models` names it) contains one of `only` (every row when `only` is empty). No row is a
+/// [`BadInput`] naming the labels it could have matched.
+pub fn select_cases(styles: &[StyleSource], only: &[String]) -> Result<Vec<LiveCase>, BadInput> {
+    let label = |c: &LiveCase| case_label(c, &style_label(&styles[c.style]));
+    let cases: Vec<LiveCase> = live_cases(styles.len())
+        .into_iter()
+        .filter(|c| only.is_empty() || only.iter().any(|o| label(c).contains(o.as_str())))
+        .collect();
+    if cases.is_empty() {
+        let examples: Vec<String> = live_cases(styles.len())
+            .iter()
+            .filter(|c| c.motion == SLIDER_MOTION && c.solver == SolverKind::Awt && c.style == 0)
+            .map(label)
+            .collect();
+        return Err(BadInput(format!(
+            "--rows: no row of the live matrix matches {only:?}; labels read like {}",
+            examples.join(", ")
+        )));
+    }
+    Ok(cases)
+}
+
+/// Runs the matrix: `seconds` simulated per row on `styles`, drawing `strands` strands; only
+/// the rows [`select_cases`] picks with `only`.
 pub fn bench_live(
     styles: &[StyleSource],
     seconds: f64,
     strands: usize,
+    only: &[String],
 ) -> anyhow::Result<Vec<LiveRow>> {
-    let cases = live_cases(styles.len());
+    let cases = select_cases(styles, only)?;
     let progress = ProgressBar::new(cases.len() as u64);
     progress.set_style(
         ProgressStyle::with_template(
@@ -374,5 +400,32 @@ mod tests {
         assert!(ends.iter().any(|c| c.split == Some(0.05)));
         assert!(ends.iter().any(|c| c.merge == Some(0.005)));
         assert_eq!(cases.iter().filter(|c| c.render).count(), 20);
+    }
+
+    #[test]
+    fn rows_picks_the_rows_whose_label_contains_a_text() {
+        let styles: Vec<StyleSource> = crate::bench::PAPER_MODELS
+            .iter()
+            .map(|m| StyleSource::parse(m))
+            .collect();
+        let all = |only: &[&str]| {
+            let only: Vec<String> = only.iter().map(|s| s.to_string()).collect();
+            select_cases(&styles, &only)
+        };
+        assert_eq!(all(&[]).unwrap().len(), live_cases(4).len());
+        let split = all(&["split 0.05"]).unwrap();
+        assert_eq!(split.len(), 4);
+        assert!(split.iter().all(|c| c.split == Some(0.05) && !c.render));
+        let two = all(&["split 0.05", "+render"]).unwrap();
+        assert_eq!(two.len(), 4 + 20);
+        // `long` names a style: not `long_curly`'s rows.
+        let long = all(&["awt long shake"]).unwrap();
+        assert_eq!(long.len(), 1 + 4 + 1, "plain, four slider ends, rendering");
+        assert!(long.iter().all(|c| c.style == 2 && c.motion == "shake"));
+        let err = all(&["awt bald shake"]).unwrap_err().to_string();
+        assert!(
+            err.contains("--rows") && err.contains("awt short shake split 0.05"),
+            "{err}"
+        );
     }
 }

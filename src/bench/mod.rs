@@ -82,6 +82,8 @@ pub struct BenchOptions {
     /// Run the live matrix (only that): every solver × style × motion, the slider ends, and
     /// rendering on.
     pub live: bool,
+    /// Run only the live rows whose label contains one of these texts (all when empty).
+    pub live_rows: Vec<String>,
 }
 
 /// One row of the §5.2 table (a style under both `single-level` and `awt`), as written to JSON.
@@ -415,7 +417,7 @@ pub fn run(o: &BenchOptions) -> anyhow::Result<()> {
         Vec::new()
     };
     let live_rows = if o.live {
-        live::bench_live(&o.styles, o.seconds, o.strands)?
+        live::bench_live(&o.styles, o.seconds, o.strands, &o.live_rows)?
     } else {
         Vec::new()
     };

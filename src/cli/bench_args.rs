@@ -58,6 +58,13 @@ pub struct BenchArgs {
     /// contacts, the worst row last (JSON key "live"). 5 s simulated per row, 1 with --quick.
     #[arg(long, conflicts_with = "render")]
     pub live: bool,
+    /// With --live: run only the rows whose label contains one of these comma-separated texts.
+    /// A row's label is `SOLVER STYLE MOTION`, then ` split X` or ` merge X` at a slider end
+    /// and ` +render` with rendering on: `--rows "awt long_curly shake"` runs that style's
+    /// plain, slider-end and rendering rows under `shake`, `--rows "split 0.05,+render"` every
+    /// split-0.05 and rendering row. Default: every row.
+    #[arg(long, value_delimiter = ',', value_name = "TEXTS", requires = "live")]
+    pub rows: Vec<String>,
 }
 
 impl BenchArgs {
@@ -108,6 +115,7 @@ impl BenchArgs {
             render: self.render,
             render_frames: if self.quick { 3 } else { 30 },
             live: self.live,
+            live_rows: self.rows.clone(),
         })
     }
 
