@@ -82,7 +82,17 @@
 //!   boxes (middle, half length + radius) removes only 4–6 % of the tested pairs (the wisps
 //!   are mostly parallel) and was no faster either. Per tested pair, about a fifth of the
 //!   stage is the lanes' closest points, and the rest copying the pair into the lanes,
-//!   writing the contact and the response.
+//!   writing the contact and the response. Two more, measured the same way on 2026-12-05
+//!   (3 s of `shake` at split 0.05 on `long_curly`, one thread, 63–68 ms a call whatever the
+//!   variant): cells of 1, 1.5 or 2 mean segment lengths instead of 3 (with up to 8 or 32
+//!   cells per segment) cut the candidates from 4.2 M to 2.6–3.4 M but not the time, the
+//!   tested pairs staying at 1.5–1.7 M; and copying each cell's segments side by side before
+//!   its pairs, so that the filters and the lanes read the L1 cache instead of all over the
+//!   1.3 MB of [`SegPre`], was 1–2 % slower. So the pairs are not waiting on memory for their
+//!   segments: the stage is bound by the work per tested pair (≈ 42 ns, ≈ 130 cycles, of
+//!   which about a third is the candidate loop's filters and branches, a fifth the closest
+//!   points, a quarter writing and reading back the 1.1 M contacts (53 MB a step, more than
+//!   the L3 cache) and the rest copying into the lanes).
 //! * **Filters are conservative and shared.** Box overlap (each box inflated by its own radius
 //!   and rounded outwards to f32, so two boxes overlap whenever the segments are within
 //!   `r1 + r2` on every axis), adjacency and the
