@@ -12,23 +12,10 @@
 //! images go back to the renderer to be drawn into again.
 //!
 //! The simulation comes first: the render thread lowers its own scheduling priority before it
-//! builds the renderer, whose pool threads inherit it (on Linux a thread's scheduling class
-//! and nice value are its own and pass to the threads it starts). On a 2-core machine the
-//! simulation's two threads then get the cores when they need them, and the renderer takes
-//! what is left: a live run skips images, not simulation frames.
-//!
-//! Live, the render threads go into Linux's `SCHED_IDLE` class: they run only on a core that
-//! nothing else wants, and a waking simulation thread takes the core from them at once. A nice
-//! value of 10 (still used when recording, and as the fallback) leaves the renderer about a
-//! tenth of a contended core, and more to the point lets it finish its time slice before a
-//! woken simulation thread gets the core: the collider's helper then often wakes too late to
-//! share a step. Measured on the live matrix's AWT `long` × `shake` row with rendering
-//! (`bench --live`, 5 s, the two builds alternated): real-time factor 0.81–0.91 at nice 10,
-//! 0.90 at nice 19, 0.97–1.05 with `SCHED_IDLE` (1.36 with rendering off). When the
-//! simulation keeps up, it sleeps between frames and the renderer gets those cores; when it
-//! cannot, the images are what gives. Recording renders every frame and the simulation waits
-//! for it, so there the renderer keeps an ordinary (nice 10) share: on a machine busy with
-//! other work an idle-class renderer would hardly run at all.
+//! builds the renderer, whose pool threads inherit it (on Linux a thread's nice value is its
+//! own and passes to the threads it starts). On a 2-core machine the simulation's two threads
+//! then get the cores when they need them, and the renderer takes what is left: a live run
+//! skips images, not simulation frames.
 
 use crossbeam_channel::{Receiver, Sender};
 use std::thread::JoinHandle;
@@ -79,7 +66,7 @@ pub fn start(setup: RenderSetup) -> Result<(), String> {
     std::thread::Builder::new()
         .name("wisptree-render".into())
         .spawn(move || {
-            lower_this_threads_priority(setup.live);
+            lower_this_threads_priority();
             let (w, h) = setup.size;
             let renderer = match Renderer::new(setup.params, w, h, crate::render::default_threads())
             {
@@ -105,18 +92,11 @@ pub fn start(setup: RenderSetup) -> Result<(), String> {
         .unwrap_or_else(|_| Err("the render thread stopped while starting".to_owned()))
 }
 
-/// Lowers this thread's scheduling priority (Linux: per thread, inherited by the threads it
-/// starts): the `SCHED_IDLE` class when `idle` (live runs, see the module doc), else, or if
-/// that is refused, a nice value [`RENDER_NICENESS`] higher. Elsewhere, nothing.
-#[cfg_attr(not(target_os = "linux"), allow(unused_variables))]
-fn lower_this_threads_priority(idle: bool) {
+/// Raises this thread's nice value (Linux: per thread); elsewhere, or if refused, nothing.
+fn lower_this_threads_priority() {
     #[cfg(target_os = "linux")]
     // SAFETY: plain system calls on this thread's own id; a failure is harmless.
     unsafe {
-        let param = libc::sched_param { sched_priority: 0 };
-        if idle && libc::sched_setscheduler(0, libc::SCHED_IDLE, &param) == 0 {
-            return;
-        }
         let tid = libc::syscall(libc::SYS_gettid) as libc::id_t;
         let now = libc::getpriority(libc::PRIO_PROCESS, tid);
         libc::setpriority(libc::PRIO_PROCESS, tid, (now + RENDER_NICENESS).min(19));
@@ -220,55 +200,5 @@ fn encode_loop(jobs: &Receiver<Job>, output: &Sender<Frame>, images: &Sender<Ima
         if output.send(frame).is_err() {
             break;
         }
-    }
-}
-
-#[cfg(all(test, target_os = "linux"))]
-mod tests {
-    use super::*;
-
-    /// The scheduling class and nice value of a new thread after lowering it.
-    fn lowered(idle: bool) -> (i32, i32) {
-        std::thread::spawn(move || {
-            lower_this_threads_priority(idle);
-            // SAFETY: plain system calls on this thread's own id.
-            unsafe {
-                let tid = libc::syscall(libc::SYS_gettid) as libc::id_t;
-                (
-                    libc::sched_getscheduler(0),
-                    libc::getpriority(libc::PRIO_PROCESS, tid),
-                )
-            }
-        })
-        .join()
-        .expect("the probe thread")
-    }
-
-    #[test]
-    fn live_renders_run_in_the_idle_class_and_recordings_at_a_higher_nice_value() {
-        // SAFETY: reads this thread's own nice value.
-        let base = unsafe {
-            libc::getpriority(
-                libc::PRIO_PROCESS,
-                libc::syscall(libc::SYS_gettid) as libc::id_t,
-            )
-        };
-        let (policy, _) = lowered(true);
-        assert_eq!(
-            policy,
-            libc::SCHED_IDLE,
-            "a live render thread is idle-class"
-        );
-        let (policy, nice) = lowered(false);
-        assert_eq!(
-            policy,
-            libc::SCHED_OTHER,
-            "a recording's render thread stays normal"
-        );
-        assert_eq!(
-            nice,
-            (base + RENDER_NICENESS).min(19),
-            "at a higher nice value"
-        );
     }
 }
