@@ -16,6 +16,15 @@
 //! own and passes to the threads it starts). On a 2-core machine the simulation's two threads
 //! then get the cores when they need them, and the renderer takes what is left: a live run
 //! skips images, not simulation frames.
+//!
+//! Lower was tried (2026-12-05). Live in Linux's `SCHED_IDLE` class the renderer gave the
+//! simulation more: `bench --live`, the 20 rendering rows at 5 s, alternated three times with
+//! this nice-10 build, median 1.06 (1.01–1.23) faster, AWT `long` × `shake` 0.90 → 1.10. But
+//! an idle-class (or nice-19) thread barely runs while other programs hold the cores, and a
+//! live run waits for the frame the renderer is drawing when it stops: with two busy loops
+//! of another program on both cores, Ctrl-C on `run --web --style long --motion shake` took
+//! 15 s to exit idle-class and 4 s at nice 19, against 0.4 s at nice 10. A quick stop was
+//! kept; lowering it further needs a renderer that can drop a frame half drawn.
 
 use crossbeam_channel::{Receiver, Sender};
 use std::thread::JoinHandle;
