@@ -140,6 +140,7 @@ impl RecordingSink {
             jpeg: crate::render::encode_jpeg(img, super::render_thread::JPEG_QUALITY),
             width: img.width,
             height: img.height,
+            shows: None,
         });
         r.log(solver)
     }

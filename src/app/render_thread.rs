@@ -1,35 +1,39 @@
 //! The render thread, between the simulation and the logger: renders each frame's strands
 //! (the right half of the AWT paper's Figure 4) and encodes the image for the recording.
 //!
-//! Live, a frame that finds another one waiting behind it is passed on without an image (the
-//! renderer shows the newest state it can), so a slow renderer never holds the simulation
-//! back; the skipped frames are counted in `/stats/render_skipped`. Recording, every frame is
-//! rendered.
+//! Recording, every frame is rendered. The JPEG encoding then runs on a thread of its own, one
+//! frame behind the renderer: the encoder is single-threaded, and done in line it left one of
+//! the renderer's two cores idle for a tenth of every frame. Frames keep their order (one
+//! encoder, first in first out), and the images go back to the renderer to be drawn into again.
 //!
-//! The JPEG encoding runs on a thread of its own, one frame behind the renderer: the encoder
-//! is single-threaded, and done in line it left one of the renderer's two cores idle for a
-//! tenth of every frame. Frames keep their order (one encoder, first in first out), and the
-//! images go back to the renderer to be drawn into again.
+//! Live, the renderer draws the newest frame it can and skips the others (counted in
+//! `/stats/render_skipped`), so a slow renderer never holds the simulation back (see below).
 //!
-//! The simulation comes first: the render thread lowers its own scheduling priority before it
-//! builds the renderer, whose pool threads inherit it (on Linux a thread's nice value is its
-//! own and passes to the threads it starts). On a 2-core machine the simulation's two threads
-//! then get the cores when they need them, and the renderer takes what is left: a live run
-//! skips images, not simulation frames.
+//! The simulation comes first. Recording, the render thread raises its own nice value before
+//! it builds the renderer, whose pool threads inherit it (on Linux a thread's nice value is its
+//! own and passes to the threads it starts), and every frame waits for its image.
 //!
-//! Lower was tried (2026-12-05). Live in Linux's `SCHED_IDLE` class the renderer gave the
-//! simulation more: `bench --live`, the 20 rendering rows at 5 s, alternated three times with
-//! this nice-10 build, median 1.06 (1.01–1.23) faster, AWT `long` × `shake` 0.90 → 1.10. But
-//! an idle-class (or nice-19) thread barely runs while other programs hold the cores, and a
-//! live run waits for the frame the renderer is drawing when it stops: with two busy loops
-//! of another program on both cores, Ctrl-C on `run --web --style long --motion shake` took
-//! 15 s to exit idle-class and 4 s at nice 19, against 0.4 s at nice 10. A quick stop was
-//! kept; lowering it further needs a renderer that can drop a frame half drawn.
+//! Live, no frame waits for the renderer at all ([`dispatch`]): the render thread only hands
+//! the newest frame's strands to a drawing thread when that one is free and passes every frame
+//! on at once; a finished image rides on to the logger with the next frame, stamped with the
+//! frame it shows ([`EncodedImage::shows`]). The drawing thread and its pool run in Linux's
+//! `SCHED_IDLE` class: they get only a core nothing else wants, and a waking simulation thread
+//! takes it from them at once. When the run stops, the render thread lets go of a half-drawn
+//! image instead of waiting for it, so a starved renderer cannot hold up the end of a run.
+//!
+//! Why (2026-12-05): at nice 10 the renderer still finished its time slice before a woken
+//! simulation thread got the core, and the collider's helper then often woke too late to share
+//! a step: `bench --live`, the 20 rendering rows at 5 s alternated three times, idle class
+//! against nice 10, median 1.06 (1.01–1.23) faster, AWT `long` × `shake` 0.90 → 1.10. The
+//! idle class was tried first with the frames still passing through the drawing thread: with
+//! two busy loops of another program on both cores, Ctrl-C on `run --web --style long --motion
+//! shake` then waited 15 s for the frame being drawn (0.4 s at nice 10). With the drawing off
+//! the frames' path, the stop no longer depends on it.
 
 use crossbeam_channel::{Receiver, Sender};
 use std::thread::JoinHandle;
 
-use crate::frame::Frame;
+use crate::frame::{BodyBuf, EncodedImage, Frame, StrandBuf};
 use crate::render::{camera::DEFAULT_VIEW, encode_jpeg_into, Camera, Image, RenderInput, Renderer};
 use crate::report::{Aggregate, Stat};
 use crate::scene::Scene;
@@ -68,14 +72,17 @@ pub struct RenderSetup {
     pub live: bool,
 }
 
-/// Starts the render thread at a lower priority than the caller's; returns once its renderer
-/// is built, or why it could not be.
+/// Starts the render thread at a lower priority than the caller's (live: the drawing thread,
+/// see the module doc); returns once its renderer is built, or why it could not be.
 pub fn start(setup: RenderSetup) -> Result<(), String> {
+    if setup.live {
+        return start_live(setup);
+    }
     let (ready_tx, ready_rx) = crossbeam_channel::bounded::<Result<(), String>>(1);
     std::thread::Builder::new()
         .name("wisptree-render".into())
         .spawn(move || {
-            lower_this_threads_priority();
+            lower_this_threads_priority(false);
             let (w, h) = setup.size;
             let renderer = match Renderer::new(setup.params, w, h, crate::render::default_threads())
             {
@@ -101,11 +108,143 @@ pub fn start(setup: RenderSetup) -> Result<(), String> {
         .unwrap_or_else(|_| Err("the render thread stopped while starting".to_owned()))
 }
 
-/// Raises this thread's nice value (Linux: per thread); elsewhere, or if refused, nothing.
-fn lower_this_threads_priority() {
+/// A frame's strands and body, handed to the drawing thread (live).
+pub struct DrawJob {
+    /// The frame's index and simulated time, for [`EncodedImage::shows`].
+    pub index: u64,
+    /// Simulated time of the frame, s.
+    pub sim_time: f64,
+    /// Every strand, as the frame had them.
+    pub strands: StrandBuf,
+    /// The body, as posed in the frame.
+    pub body: BodyBuf,
+}
+
+/// What the drawing thread hands back: the encoded image and the job's buffers, to reuse.
+pub struct Drawn {
+    /// The image, stamped with the frame it shows.
+    pub image: EncodedImage,
+    /// The job, emptied of nothing: its buffers go into the next job.
+    pub job: DrawJob,
+}
+
+/// Live: starts the drawing thread (idle class, with the renderer and its pool) and the render
+/// thread that runs [`dispatch`] at the caller's priority.
+fn start_live(setup: RenderSetup) -> Result<(), String> {
+    let (ready_tx, ready_rx) = crossbeam_channel::bounded::<Result<(), String>>(1);
+    // One job at a time: the render thread gives a job only to an idle drawing thread.
+    let (jobs_tx, jobs_rx) = crossbeam_channel::bounded::<DrawJob>(1);
+    let (drawn_tx, drawn_rx) = crossbeam_channel::bounded::<Drawn>(1);
+    let RenderSetup {
+        params,
+        size: (w, h),
+        camera,
+        input,
+        output,
+        live: _,
+    } = setup;
+    std::thread::Builder::new()
+        .name("wisptree-draw".into())
+        .spawn(move || {
+            lower_this_threads_priority(true);
+            let mut renderer = match Renderer::new(params, w, h, crate::render::default_threads()) {
+                Ok(r) => r,
+                Err(e) => {
+                    let _ = ready_tx.send(Err(e));
+                    return;
+                }
+            };
+            let _ = ready_tx.send(Ok(()));
+            let mut img = Image::default();
+            while let Ok(job) = jobs_rx.recv() {
+                let input = RenderInput {
+                    strands: &job.strands,
+                    body: &job.body,
+                };
+                renderer.render(&input, &camera, &mut img);
+                let mut image = EncodedImage {
+                    shows: Some((job.index, job.sim_time)),
+                    ..EncodedImage::default()
+                };
+                encode_jpeg_into(&img, JPEG_QUALITY, &mut image.jpeg);
+                (image.width, image.height) = (img.width, img.height);
+                if drawn_tx.send(Drawn { image, job }).is_err() {
+                    break;
+                }
+            }
+        })
+        .map_err(|e| format!("starting the drawing thread: {e}"))?;
+    ready_rx
+        .recv()
+        .unwrap_or_else(|_| Err("the drawing thread stopped while starting".to_owned()))?;
+    std::thread::Builder::new()
+        .name("wisptree-render".into())
+        .spawn(move || dispatch(&input, &output, &jobs_tx, &drawn_rx))
+        .map_err(|e| format!("starting the render thread: {e}"))?;
+    Ok(())
+}
+
+/// The live render thread: passes every frame from `input` on to `output` at once. The
+/// drawing thread (`jobs` in, `drawn` out) gets the strands of a frame that arrives while it is
+/// idle; a frame that arrives while it draws is skipped. A finished image goes on with the next
+/// frame. Returns when `input` hangs up or `output` goes away, without waiting for an image
+/// being drawn.
+pub fn dispatch(
+    input: &Receiver<Frame>,
+    output: &Sender<Frame>,
+    jobs: &Sender<DrawJob>,
+    drawn: &Receiver<Drawn>,
+) {
+    let mut spare = Some(DrawJob {
+        index: 0,
+        sim_time: 0.0,
+        strands: StrandBuf::default(),
+        body: BodyBuf::default(),
+    });
+    let mut skipped = 0u64;
+    while let Ok(mut frame) = input.recv() {
+        frame.image = None;
+        if let Ok(Drawn { image, job }) = drawn.try_recv() {
+            frame.image = Some(image);
+            spare = Some(job);
+        }
+        if !frame.render_strands.is_empty() {
+            match spare.take() {
+                Some(mut job) => {
+                    // The frame goes on with the job's old strands, which nothing after the
+                    // renderer reads; the simulation refills them when the frame comes back.
+                    std::mem::swap(&mut job.strands, &mut frame.render_strands);
+                    job.body.clone_from(&frame.body);
+                    (job.index, job.sim_time) = (frame.index, frame.sim_time);
+                    if jobs.send(job).is_err() {
+                        // No drawing thread any more: pass the frames on without images.
+                        skipped += 1;
+                    }
+                }
+                None => skipped += 1,
+            }
+        }
+        frame
+            .stats
+            .push(Stat::new(RENDER_SKIPPED, skipped as f64, Aggregate::Last));
+        if output.send(frame).is_err() {
+            break;
+        }
+    }
+}
+
+/// Lowers this thread's scheduling priority (Linux: per thread, inherited by the threads it
+/// starts): the `SCHED_IDLE` class when `idle` (the live drawing thread, see the module doc),
+/// else, or if that is refused, a nice value [`RENDER_NICENESS`] higher. Elsewhere, nothing.
+#[cfg_attr(not(target_os = "linux"), allow(unused_variables))]
+fn lower_this_threads_priority(idle: bool) {
     #[cfg(target_os = "linux")]
     // SAFETY: plain system calls on this thread's own id; a failure is harmless.
     unsafe {
+        let param = libc::sched_param { sched_priority: 0 };
+        if idle && libc::sched_setscheduler(0, libc::SCHED_IDLE, &param) == 0 {
+            return;
+        }
         let tid = libc::syscall(libc::SYS_gettid) as libc::id_t;
         let now = libc::getpriority(libc::PRIO_PROCESS, tid);
         libc::setpriority(libc::PRIO_PROCESS, tid, (now + RENDER_NICENESS).min(19));
@@ -192,6 +331,7 @@ struct Job {
 /// Puts `img` into `frame` as a JPEG, reusing the frame's previous JPEG buffer.
 fn encode(frame: &mut Frame, img: &Image) {
     let mut encoded = frame.image.take().unwrap_or_default();
+    encoded.shows = None;
     encode_jpeg_into(img, JPEG_QUALITY, &mut encoded.jpeg);
     encoded.width = img.width;
     encoded.height = img.height;
@@ -209,5 +349,113 @@ fn encode_loop(jobs: &Receiver<Job>, output: &Sender<Frame>, images: &Sender<Ima
         if output.send(frame).is_err() {
             break;
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crossbeam_channel::{bounded, unbounded};
+
+    fn frame(index: u64) -> Frame {
+        let mut f = Frame {
+            index,
+            sim_time: index as f64 * 0.04,
+            ..Frame::default()
+        };
+        f.render_strands.points.push([index as f32, 0.0, 0.0]);
+        f.render_strands.offsets.extend([0, 1]);
+        f
+    }
+
+    /// The drawing thread stands still until told: frames still pass, the first finished
+    /// image rides on the next frame with its own frame's stamp, and hanging up ends the
+    /// render thread while an image is still being drawn.
+    #[test]
+    fn live_frames_never_wait_for_the_drawing_and_images_keep_their_frames_stamp() {
+        let (sim_tx, input) = bounded::<Frame>(1);
+        let (output, logger) = unbounded::<Frame>();
+        let (jobs_tx, jobs_rx) = bounded::<DrawJob>(1);
+        let (drawn_tx, drawn_rx) = bounded::<Drawn>(1);
+        let render = std::thread::spawn(move || dispatch(&input, &output, &jobs_tx, &drawn_rx));
+        // Frames 0..5 with the drawing thread busy on frame 0 all along.
+        for i in 0..5 {
+            sim_tx.send(frame(i)).unwrap();
+            let f = logger.recv().expect("every frame passes on");
+            assert_eq!(f.index, i);
+            assert!(f.image.is_none());
+        }
+        let job = jobs_rx
+            .try_recv()
+            .expect("frame 0 went to the drawing thread");
+        assert_eq!((job.index, job.strands.points[0][0]), (0, 0.0));
+        assert!(jobs_rx.try_recv().is_err(), "one job at a time");
+        // Drawn: the image goes on with the next frame, stamped with frame 0.
+        let image = EncodedImage {
+            jpeg: vec![1, 2, 3],
+            shows: Some((job.index, job.sim_time)),
+            ..EncodedImage::default()
+        };
+        drawn_tx.send(Drawn { image, job }).unwrap();
+        sim_tx.send(frame(5)).unwrap();
+        let f = logger.recv().unwrap();
+        assert_eq!(f.index, 5);
+        let img = f.image.expect("the finished image rides on frame 5");
+        assert_eq!(img.shows, Some((0, 0.0)));
+        let skipped = f.stats.iter().find(|s| s.name == RENDER_SKIPPED).unwrap();
+        assert_eq!(skipped.value, 4.0, "frames 1-4 were not drawn");
+        // Frame 5 went to the now idle drawing thread; nobody ever finishes it.
+        let job = jobs_rx.try_recv().expect("frame 5 is being drawn");
+        assert_eq!(job.index, 5);
+        sim_tx.send(frame(6)).unwrap();
+        assert_eq!(logger.recv().unwrap().index, 6);
+        // The simulation stops: the render thread ends without the image of frame 5.
+        drop(sim_tx);
+        render.join().expect("the render thread returns");
+        assert!(logger.recv().is_err(), "the logger's input closes");
+        drop(jobs_rx);
+    }
+
+    #[cfg(target_os = "linux")]
+    #[test]
+    fn live_drawing_runs_in_the_idle_class_and_recording_at_a_higher_nice_value() {
+        let probe = |idle: bool| {
+            std::thread::spawn(move || {
+                lower_this_threads_priority(idle);
+                // SAFETY: plain system calls on this thread's own id.
+                unsafe {
+                    let tid = libc::syscall(libc::SYS_gettid) as libc::id_t;
+                    (
+                        libc::sched_getscheduler(0),
+                        libc::getpriority(libc::PRIO_PROCESS, tid),
+                    )
+                }
+            })
+            .join()
+            .expect("the probe thread")
+        };
+        // SAFETY: reads this thread's own nice value.
+        let base = unsafe {
+            libc::getpriority(
+                libc::PRIO_PROCESS,
+                libc::syscall(libc::SYS_gettid) as libc::id_t,
+            )
+        };
+        assert_eq!(
+            probe(true).0,
+            libc::SCHED_IDLE,
+            "live drawing is idle-class"
+        );
+        let (policy, nice) = probe(false);
+        assert_eq!(
+            policy,
+            libc::SCHED_OTHER,
+            "recording stays in the normal class"
+        );
+        assert_eq!(
+            nice,
+            (base + RENDER_NICENESS).min(19),
+            "at a higher nice value"
+        );
     }
 }

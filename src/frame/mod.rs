@@ -219,6 +219,9 @@ pub struct EncodedImage {
     pub width: u32,
     /// Height, pixels.
     pub height: u32,
+    /// The frame the image shows, `(index, sim_time)`, when it is not the frame carrying it
+    /// (live, an image comes a frame or more after its own frame); `None`: this frame.
+    pub shows: Option<(u64, f64)>,
 }
 
 impl Frame {

@@ -282,17 +282,22 @@ impl Logger {
         self.log_events(frame)?;
         self.log_stats(frame)?;
         self.log_inspect(frame)?;
+        for m in &frame.messages {
+            self.rec
+                .log(self.paths.log.clone(), &TextLog::new(m.as_str()))?;
+        }
         if let Some(img) = &frame.image {
+            // A live image comes after its own frame: it is logged at that frame's time.
+            if let Some((index, sim_time)) = img.shows {
+                self.set_time(index, sim_time);
+            }
             let path = self.paths.named(paths::RENDER).clone();
             self.rec.log(
                 path,
                 &rerun::EncodedImage::from_file_contents(img.jpeg.clone())
                     .with_media_type(rerun::components::MediaType::JPEG),
             )?;
-        }
-        for m in &frame.messages {
-            self.rec
-                .log(self.paths.log.clone(), &TextLog::new(m.as_str()))?;
+            self.set_time(frame.index, frame.sim_time);
         }
         Ok(())
     }
