@@ -71,7 +71,8 @@ pub struct RenderSetup {
     pub input: Receiver<Frame>,
     /// Frames on to the logger.
     pub output: Sender<Frame>,
-    /// Skip an image when frames wait behind it.
+    /// Live: frames never wait for the renderer, which draws what it has time for (see the
+    /// module doc); else every frame is rendered.
     pub live: bool,
 }
 
@@ -101,7 +102,6 @@ pub fn start(setup: RenderSetup) -> Result<(), String> {
                 camera: setup.camera,
                 input: setup.input,
                 output: setup.output,
-                live: setup.live,
             }
             .run();
         })
@@ -112,23 +112,24 @@ pub fn start(setup: RenderSetup) -> Result<(), String> {
 }
 
 /// A frame's strands and body, handed to the drawing thread (live).
-pub struct DrawJob {
-    /// The frame's index and simulated time, for [`EncodedImage::shows`].
-    pub index: u64,
-    /// Simulated time of the frame, s.
-    pub sim_time: f64,
+struct DrawJob {
+    /// The frame's index, for [`EncodedImage::shows`].
+    index: u64,
+    /// The frame's simulated time, s.
+    sim_time: f64,
     /// Every strand, as the frame had them.
-    pub strands: StrandBuf,
+    strands: StrandBuf,
     /// The body, as posed in the frame.
-    pub body: BodyBuf,
+    body: BodyBuf,
 }
 
-/// What the drawing thread hands back: the encoded image and the job's buffers, to reuse.
-pub struct Drawn {
+/// What the drawing thread hands back: the encoded image, and the job whose buffers the next
+/// job reuses.
+struct Drawn {
     /// The image, stamped with the frame it shows.
-    pub image: EncodedImage,
-    /// The job, emptied of nothing: its buffers go into the next job.
-    pub job: DrawJob,
+    image: EncodedImage,
+    /// The job drawn.
+    job: DrawJob,
 }
 
 /// Live: starts the drawing thread (idle class, with the renderer and its pool) and the render
@@ -192,7 +193,7 @@ fn start_live(setup: RenderSetup) -> Result<(), String> {
 /// idle; a frame that arrives while it draws is skipped. A finished image goes on with the next
 /// frame. Returns when `input` hangs up or `output` goes away, without waiting for an image
 /// being drawn.
-pub fn dispatch(
+fn dispatch(
     input: &Receiver<Frame>,
     output: &Sender<Frame>,
     jobs: &Sender<DrawJob>,
@@ -254,7 +255,8 @@ fn lower_this_threads_priority(idle: bool) {
     }
 }
 
-/// The render thread's inputs.
+/// The render thread's inputs when recording (every frame rendered, in order; live runs use
+/// [`dispatch`] and a drawing thread instead).
 pub struct RenderThread {
     /// The renderer (its buffers are reused frame to frame).
     pub renderer: Renderer,
@@ -264,8 +266,6 @@ pub struct RenderThread {
     pub input: Receiver<Frame>,
     /// Frames (with images) to the logger.
     pub output: Sender<Frame>,
-    /// Skip frames when behind (live); else render every one.
-    pub live: bool,
 }
 
 impl RenderThread {
@@ -282,12 +282,9 @@ impl RenderThread {
         // Without an encoder thread (the system refused one), encode in line.
         let mut inline = Image::default();
         let encoder: Option<JoinHandle<()>> = encoder.ok();
-        let mut skipped = 0u64;
         while let Ok(mut frame) = self.input.recv() {
-            let behind = self.live && !self.input.is_empty();
             let mut image = None;
-            if behind || frame.render_strands.is_empty() {
-                skipped += u64::from(behind);
+            if frame.render_strands.is_empty() {
                 frame.image = None;
             } else {
                 let input = RenderInput {
@@ -302,9 +299,10 @@ impl RenderThread {
                 self.renderer.render(&input, &self.camera, &mut img);
                 image = Some(img);
             }
+            // Recording skips nothing; the stat is logged all the same, as live runs log it.
             frame
                 .stats
-                .push(Stat::new(RENDER_SKIPPED, skipped as f64, Aggregate::Last));
+                .push(Stat::new(RENDER_SKIPPED, 0.0, Aggregate::Last));
             let sent = if encoder.is_some() {
                 to_encoder.send(Job { frame, image }).is_ok()
             } else {
