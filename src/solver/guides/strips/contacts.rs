@@ -71,7 +71,9 @@ impl Strips {
                 verts.clear();
                 verts.extend(group.iter().map(|&(v, _)| v));
                 verts.sort_unstable();
-                this.triangle_hits(group[0].1 as usize, &verts, ch, p, chunk);
+                // `tri_piece` kept only vertices within `reach` of the triangle's prism and box,
+                // at these very positions: the bounds would turn none of them down.
+                this.triangle_hits(group[0].1 as usize, &verts, ch, p, Bounds::Passed, chunk);
             }
             let mut seg = std::mem::take(&mut chunk.seg);
             seg.clear();
@@ -167,17 +169,23 @@ impl Strips {
             if start == end || self.broken[t] {
                 continue;
             }
-            self.triangle_hits(t, &self.tri_verts[start..end], chains, p, out);
+            let verts = &self.tri_verts[start..end];
+            self.triangle_hits(t, verts, chains, p, Bounds::Test, out);
         }
     }
 
     /// The contacts of triangle `t` with its candidate vertices `verts` (in index order).
+    /// With [`Bounds::Test`] each vertex is first turned down cheaply when the triangle's box
+    /// or prism already puts it past the contact distance; [`Bounds::Passed`] skips that for
+    /// candidates the search has just kept within it (the same contacts either way: the bounds
+    /// only turn down vertices the exact distance turns down too).
     pub(super) fn triangle_hits(
         &self,
         t: usize,
         verts: &[u32],
         chains: &Chains,
         p: &GuideParams,
+        bounds: Bounds,
         out: &mut Chunk,
     ) {
         let n = chains.n;
@@ -189,9 +197,6 @@ impl Strips {
         let tv = self.tri[t].map(|w| w as usize);
         let tp = tv.map(|w| chains.x[w]);
         let pre = TrianglePre::new(&tp);
-        let prism = Prism::new(&tp);
-        let lo = tp[0].inf(&tp[1]).inf(&tp[2]) - Vector3::repeat(far);
-        let hi = tp[0].sup(&tp[1]).sup(&tp[2]) + Vector3::repeat(far);
         let tt = tv.map(|w| tangents[w]);
         let tvel = tv.map(|w| chains.v[w]);
         let tsoft = chains.soft[tv[0]]
@@ -200,18 +205,30 @@ impl Strips {
         // The box and prism bounds of up to 32 vertices at a time without a branch (a bit
         // mask: about half the candidates pass, which a branch per test mispredicts), then
         // the exact test and the force of those that pass, in the same order.
+        let (prism, lo, hi) = match bounds {
+            Bounds::Test => (
+                Prism::new(&tp),
+                tp[0].inf(&tp[1]).inf(&tp[2]) - Vector3::repeat(far),
+                tp[0].sup(&tp[1]).sup(&tp[2]) + Vector3::repeat(far),
+            ),
+            Bounds::Passed => Default::default(),
+        };
         for group in verts.chunks(32) {
             let mut mask = 0u32;
-            for (j, &v) in group.iter().enumerate() {
-                let x = chains.x[v as usize];
-                let inside = (x.x >= lo.x)
-                    & (x.y >= lo.y)
-                    & (x.z >= lo.z)
-                    & (x.x <= hi.x)
-                    & (x.y <= hi.y)
-                    & (x.z <= hi.z)
-                    & prism.near_all(&x, far);
-                mask |= (inside as u32) << j;
+            if bounds == Bounds::Passed {
+                mask = tail_mask32(group.len());
+            } else {
+                for (j, &v) in group.iter().enumerate() {
+                    let x = chains.x[v as usize];
+                    let inside = (x.x >= lo.x)
+                        & (x.y >= lo.y)
+                        & (x.z >= lo.z)
+                        & (x.x <= hi.x)
+                        & (x.y <= hi.y)
+                        & (x.z <= hi.z)
+                        & prism.near_all(&x, far);
+                    mask |= (inside as u32) << j;
+                }
             }
             while mask != 0 {
                 let j = mask.trailing_zeros() as usize;
@@ -323,6 +340,26 @@ impl Strips {
             f,
             cd,
         });
+    }
+}
+
+/// Whether [`Strips::triangle_hits`] tests its candidates against the triangle's box and
+/// prism first.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) enum Bounds {
+    /// Test them: candidates listed for a whole step, at a larger reach.
+    Test,
+    /// The search has just kept them within the contact distance, at these positions.
+    Passed,
+}
+
+/// Bits `0..m` set, `m ≤ 32`.
+#[inline]
+fn tail_mask32(m: usize) -> u32 {
+    if m >= 32 {
+        u32::MAX
+    } else {
+        (1u32 << m) - 1
     }
 }
 
