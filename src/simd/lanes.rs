@@ -17,6 +17,9 @@ pub trait Lanes: Copy {
     fn load(s: &[f64; 4]) -> Self;
     /// Writes the lanes to `out[0..4]`.
     fn store(self, out: &mut [f64; 4]);
+    /// Four rows in, four columns out: lane `i` of column `j` is `rows[i][j]` (data movement
+    /// only, so the twins agree trivially).
+    fn transpose(rows: [&[f64; 4]; 4]) -> [Self; 4];
     /// `self + o`.
     fn add(self, o: Self) -> Self;
     /// `self - o`.
@@ -96,6 +99,10 @@ impl Lanes for F64x4Portable {
     #[inline(always)]
     fn store(self, out: &mut [f64; 4]) {
         *out = self.0;
+    }
+    #[inline(always)]
+    fn transpose(rows: [&[f64; 4]; 4]) -> [Self; 4] {
+        std::array::from_fn(|j| F64x4Portable(std::array::from_fn(|i| rows[i][j])))
     }
     #[inline(always)]
     fn add(self, o: Self) -> Self {
@@ -194,6 +201,24 @@ mod avx2 {
             unsafe { _mm256_storeu_pd(out.as_mut_ptr(), self.0) }
         }
         #[inline(always)]
+        fn transpose(rows: [&[f64; 4]; 4]) -> [Self; 4] {
+            unsafe {
+                let [r0, r1, r2, r3] = rows.map(|r| _mm256_loadu_pd(r.as_ptr()));
+                // (r0[0] r1[0] r0[2] r1[2]), (r0[1] r1[1] r0[3] r1[3]), and the same of r2, r3.
+                let t0 = _mm256_unpacklo_pd(r0, r1);
+                let t1 = _mm256_unpackhi_pd(r0, r1);
+                let t2 = _mm256_unpacklo_pd(r2, r3);
+                let t3 = _mm256_unpackhi_pd(r2, r3);
+                // Low halves together, then high halves together.
+                [
+                    F64x4(_mm256_permute2f128_pd::<0x20>(t0, t2)),
+                    F64x4(_mm256_permute2f128_pd::<0x20>(t1, t3)),
+                    F64x4(_mm256_permute2f128_pd::<0x31>(t0, t2)),
+                    F64x4(_mm256_permute2f128_pd::<0x31>(t1, t3)),
+                ]
+            }
+        }
+        #[inline(always)]
         fn add(self, o: Self) -> Self {
             F64x4(unsafe { _mm256_add_pd(self.0, o.0) })
         }
@@ -252,6 +277,42 @@ mod avx2 {
         #[inline(always)]
         fn bits(m: __m256d) -> u32 {
             unsafe { _mm256_movemask_pd(m) as u32 }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Lane `i` of column `j` is `rows[i][j]`, on every level this processor has.
+    #[test]
+    fn transpose_turns_rows_into_lanes_on_both_twins() {
+        let rows: [[f64; 4]; 4] = std::array::from_fn(|i| {
+            std::array::from_fn(|j| (10 * i + j) as f64 + if j == 3 { -0.0 } else { 0.5 })
+        });
+        let refs = [&rows[0], &rows[1], &rows[2], &rows[3]];
+        let want: [[f64; 4]; 4] = std::array::from_fn(|j| std::array::from_fn(|i| rows[i][j]));
+        let portable = F64x4Portable::transpose(refs).map(|c| c.0);
+        assert_eq!(portable, want);
+        #[cfg(target_arch = "x86_64")]
+        if crate::simd::best_available() == crate::simd::Level::Avx2 {
+            #[target_feature(enable = "avx2")]
+            #[allow(unsafe_code)]
+            unsafe fn columns(refs: [&[f64; 4]; 4]) -> [[f64; 4]; 4] {
+                F64x4::transpose(refs).map(|c| {
+                    let mut out = [0.0; 4];
+                    c.store(&mut out);
+                    out
+                })
+            }
+            // SAFETY: the processor has AVX2 (checked above).
+            #[allow(unsafe_code)]
+            let avx2 = unsafe { columns(refs) };
+            assert_eq!(
+                avx2.map(|c| c.map(f64::to_bits)),
+                want.map(|c| c.map(f64::to_bits))
+            );
         }
     }
 }

@@ -10,117 +10,112 @@
 //! repulsion normal then comes from the cross product), and anything not finite. Parallel axes
 //! (the middle of the overlap) are computed in the lanes: sibling wisps are often nearly so.
 //!
-//! The caller fills a [`PairBatch`] (structure of arrays, one lane per candidate pair), calls
-//! [`narrow`], and reads [`PairOut`].
+//! The caller keeps its segments as [`Segment`]s (or in records that hold one, through
+//! `AsRef`), queues up to [`BATCH`] candidate pairs as index pairs, calls [`narrow`], and reads
+//! [`PairOut`]. The lanes are filled straight from the records, four segments at a time, by
+//! 4×4 transposes in registers ([`Lanes::transpose`]): copying 34 fields per pair into a
+//! structure of arrays first took about a seventh of the hair–hair stage.
 
 use super::lanes::{F64x4Portable, Lanes};
 use super::Level;
 
-/// Pairs in a batch (a multiple of 4): enough to amortise the call, few enough for the lanes
-/// (about 25 kB) to stay in the L1 cache.
+/// Pairs in a batch (a multiple of 4): enough to amortise the call, few enough for the
+/// results (about 4 kB) to stay in the L1 cache.
 pub const BATCH: usize = 64;
 
-/// One segment as the narrow phase reads it.
+/// One segment as the narrow phase reads it: sixteen f64 in four rows of four, so that four
+/// segments become the lanes of their fifteen fields with four 4×4 transposes (no copying into
+/// a structure of arrays first).
+#[repr(C, align(32))]
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Segment {
     /// The parent node's position, m.
     pub x: [f64; 3],
-    /// Child minus parent position, m.
-    pub d: [f64; 3],
     /// `|d|²`, computed as `(d.x·d.x + d.y·d.y) + d.z·d.z`.
     pub len2: f64,
-    /// The parent node's velocity, m/s.
-    pub vp: [f64; 3],
-    /// The child node's velocity, m/s.
-    pub vc: [f64; 3],
+    /// Child minus parent position, m.
+    pub d: [f64; 3],
     /// The cylinder's radius, m.
     pub radius: f64,
+    /// The parent node's velocity, m/s.
+    pub vp: [f64; 3],
     /// The child node's mass, kg.
     pub mass: f64,
+    /// The child node's velocity, m/s.
+    pub vc: [f64; 3],
+    /// Fills the fourth row (always 0).
+    pad: f64,
 }
 
-/// One side (first or second segment) of a batch of pairs, lane by lane.
-#[derive(Clone, Debug)]
-pub struct Side {
-    /// [`Segment::x`], per coordinate.
-    pub x: [[f64; BATCH]; 3],
-    /// [`Segment::d`].
-    pub d: [[f64; BATCH]; 3],
-    /// [`Segment::len2`].
-    pub len2: [f64; BATCH],
-    /// [`Segment::vp`].
-    pub vp: [[f64; BATCH]; 3],
-    /// [`Segment::vc`].
-    pub vc: [[f64; BATCH]; 3],
-    /// [`Segment::radius`].
-    pub radius: [f64; BATCH],
-    /// [`Segment::mass`].
-    pub mass: [f64; BATCH],
-}
+// Four rows of four f64, nothing else: what [`Segment::rows`] relies on.
+const _: () = assert!(std::mem::size_of::<Segment>() == 128);
 
-impl Default for Side {
-    fn default() -> Self {
-        Side {
-            x: [[0.0; BATCH]; 3],
-            d: [[0.0; BATCH]; 3],
-            len2: [0.0; BATCH],
-            vp: [[0.0; BATCH]; 3],
-            vc: [[0.0; BATCH]; 3],
-            radius: [0.0; BATCH],
-            mass: [0.0; BATCH],
+impl Segment {
+    /// A segment from its fields.
+    #[allow(clippy::too_many_arguments)]
+    pub fn new(
+        x: [f64; 3],
+        d: [f64; 3],
+        len2: f64,
+        vp: [f64; 3],
+        vc: [f64; 3],
+        radius: f64,
+        mass: f64,
+    ) -> Self {
+        Segment {
+            x,
+            len2,
+            d,
+            radius,
+            vp,
+            mass,
+            vc,
+            pad: 0.0,
+        }
+    }
+
+    /// The sixteen f64 as four rows: `[x, len2]`, `[d, radius]`, `[vp, mass]`, `[vc, 0]`.
+    #[inline(always)]
+    pub fn rows(&self) -> &[[f64; 4]; 4] {
+        // SAFETY: `Segment` is `repr(C)`, sixteen f64 fields and no padding (asserted above), so
+        // it has the layout of `[[f64; 4]; 4]`, whose alignment (8) it exceeds.
+        #[allow(unsafe_code)]
+        unsafe {
+            &*(self as *const Segment).cast::<[[f64; 4]; 4]>()
         }
     }
 }
 
-impl Side {
+/// Four segments' fields, lane by lane.
+struct SegLanes<V> {
+    x: [V; 3],
+    len2: V,
+    d: [V; 3],
+    radius: V,
+    vp: [V; 3],
+    mass: V,
+    vc: [V; 3],
+}
+
+impl<V: Lanes> SegLanes<V> {
+    /// Lane `k` is `segs[k]`.
     #[inline(always)]
-    fn set(&mut self, i: usize, s: &Segment) {
-        for k in 0..3 {
-            self.x[k][i] = s.x[k];
-            self.d[k][i] = s.d[k];
-            self.vp[k][i] = s.vp[k];
-            self.vc[k][i] = s.vc[k];
+    fn load(segs: [&Segment; 4]) -> Self {
+        let rows = segs.map(Segment::rows);
+        let [x0, x1, x2, len2] = V::transpose([&rows[0][0], &rows[1][0], &rows[2][0], &rows[3][0]]);
+        let [d0, d1, d2, radius] =
+            V::transpose([&rows[0][1], &rows[1][1], &rows[2][1], &rows[3][1]]);
+        let [v0, v1, v2, mass] = V::transpose([&rows[0][2], &rows[1][2], &rows[2][2], &rows[3][2]]);
+        let [c0, c1, c2, _] = V::transpose([&rows[0][3], &rows[1][3], &rows[2][3], &rows[3][3]]);
+        SegLanes {
+            x: [x0, x1, x2],
+            len2,
+            d: [d0, d1, d2],
+            radius,
+            vp: [v0, v1, v2],
+            mass,
+            vc: [c0, c1, c2],
         }
-        self.len2[i] = s.len2;
-        self.radius[i] = s.radius;
-        self.mass[i] = s.mass;
-    }
-}
-
-/// Candidate pairs in structure-of-arrays form: lane `i` is the pair `(a[i], b[i])`.
-#[derive(Clone, Debug, Default)]
-pub struct PairBatch {
-    /// The first segment of each pair.
-    pub a: Side,
-    /// The second segment.
-    pub b: Side,
-    len: usize,
-}
-
-impl PairBatch {
-    /// Adds the pair `(a, b)` in the next lane; returns whether the batch is now full.
-    #[inline(always)]
-    pub fn push(&mut self, a: &Segment, b: &Segment) -> bool {
-        let i = self.len;
-        self.a.set(i, a);
-        self.b.set(i, b);
-        self.len = i + 1;
-        self.len == BATCH
-    }
-
-    /// Pairs in the batch.
-    pub fn len(&self) -> usize {
-        self.len
-    }
-
-    /// No pair.
-    pub fn is_empty(&self) -> bool {
-        self.len == 0
-    }
-
-    /// Empties the batch (the lanes keep their old values, which [`narrow`] ignores).
-    pub fn clear(&mut self) {
-        self.len = 0;
     }
 }
 
@@ -137,7 +132,7 @@ pub struct PairParams {
     pub dt_floor: f64,
 }
 
-/// What [`narrow`] finds, lane by lane (lanes at and beyond the batch's length are garbage).
+/// What [`narrow`] finds, lane by lane (lanes at and beyond the number of pairs are garbage).
 #[derive(Clone, Debug)]
 pub struct PairOut {
     /// Closest point on the first axis, as a fraction from parent (0) to child (1).
@@ -167,25 +162,38 @@ impl Default for PairOut {
     }
 }
 
-/// The narrow phase of every pair of `batch`, on the process's [`super::level`].
+/// The narrow phase of the pairs `pairs` (at most [`BATCH`]; lane `i` is the pair of segments
+/// `segs[pairs[i].0]`, `segs[pairs[i].1]`), on the process's [`super::level`].
 #[inline]
-pub fn narrow(batch: &PairBatch, p: &PairParams, out: &mut PairOut) {
-    narrow_on(super::level(), batch, p, out);
+pub fn narrow<T: AsRef<Segment>>(
+    segs: &[T],
+    pairs: &[(u32, u32)],
+    p: &PairParams,
+    out: &mut PairOut,
+) {
+    narrow_on(super::level(), segs, pairs, p, out);
 }
 
 /// The narrow phase on a given level (tests compare the twins); a level the processor lacks
 /// falls back to the portable twin.
-pub fn narrow_on(level: Level, batch: &PairBatch, p: &PairParams, out: &mut PairOut) {
+pub fn narrow_on<T: AsRef<Segment>>(
+    level: Level,
+    segs: &[T],
+    pairs: &[(u32, u32)],
+    p: &PairParams,
+    out: &mut PairOut,
+) {
+    assert!(pairs.len() <= BATCH, "at most {BATCH} pairs a call");
     match level {
         #[cfg(target_arch = "x86_64")]
         Level::Avx2 if super::best_available() == Level::Avx2 => {
             // SAFETY: the processor has AVX2 (checked just above, once per process).
             #[allow(unsafe_code)]
             unsafe {
-                narrow_avx2(batch, p, out)
+                narrow_avx2(segs, pairs, p, out)
             }
         }
-        _ => kernel::<F64x4Portable>(batch, p, out),
+        _ => kernel::<F64x4Portable, T>(segs, pairs, p, out),
     }
 }
 
@@ -196,15 +204,13 @@ pub fn narrow_on(level: Level, batch: &PairBatch, p: &PairParams, out: &mut Pair
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 #[allow(unsafe_code)]
-unsafe fn narrow_avx2(batch: &PairBatch, p: &PairParams, out: &mut PairOut) {
-    kernel::<super::lanes::F64x4>(batch, p, out);
-}
-
-#[inline(always)]
-fn at(a: &[f64; BATCH], i: usize) -> &[f64; 4] {
-    a[i..i + 4]
-        .try_into()
-        .expect("a lane group inside the batch")
+unsafe fn narrow_avx2<T: AsRef<Segment>>(
+    segs: &[T],
+    pairs: &[(u32, u32)],
+    p: &PairParams,
+    out: &mut PairOut,
+) {
+    kernel::<super::lanes::F64x4, T>(segs, pairs, p, out);
 }
 
 #[inline(always)]
@@ -212,15 +218,6 @@ fn at_mut(a: &mut [f64; BATCH], i: usize) -> &mut [f64; 4] {
     (&mut a[i..i + 4])
         .try_into()
         .expect("a lane group inside the batch")
-}
-
-#[inline(always)]
-fn load3<V: Lanes>(a: &[[f64; BATCH]; 3], i: usize) -> [V; 3] {
-    [
-        V::load(at(&a[0], i)),
-        V::load(at(&a[1], i)),
-        V::load(at(&a[2], i)),
-    ]
 }
 
 /// `(u.x·v.x + u.y·v.y) + u.z·v.z`, as nalgebra's `dot` of 3-vectors.
@@ -232,22 +229,27 @@ fn dot<V: Lanes>(u: &[V; 3], v: &[V; 3]) -> V {
 /// The operation, once for both twins. Every line mirrors a line of the scalar routines
 /// (`closest_params` and `contact` in `solver::awt::collide::narrow`).
 #[inline(always)]
-fn kernel<V: Lanes>(batch: &PairBatch, p: &PairParams, out: &mut PairOut) {
+fn kernel<V: Lanes, T: AsRef<Segment>>(
+    segs: &[T],
+    pairs: &[(u32, u32)],
+    p: &PairParams,
+    out: &mut PairOut,
+) {
     let (zero, one, half) = (V::splat(0.0), V::splat(1.0), V::splat(0.5));
     let kf = V::splat(p.friction);
     let kr = V::splat(p.repulsion);
     let thr2 = V::splat(p.cos2_threshold);
     let dtf = V::splat(p.dt_floor);
     let (mut hit_all, mut rare_all) = (0u64, 0u64);
-    let (a, b) = (&batch.a, &batch.b);
+    let n = pairs.len();
     let mut i = 0;
-    while i < batch.len {
-        let xa = load3::<V>(&a.x, i);
-        let da = load3::<V>(&a.d, i);
-        let xb = load3::<V>(&b.x, i);
-        let db = load3::<V>(&b.d, i);
-        let la = V::load(at(&a.len2, i));
-        let le = V::load(at(&b.len2, i));
+    while i < n {
+        // Lanes past the end repeat the last pair; their bits are cleared below.
+        let pair = |k: usize| pairs[(i + k).min(n - 1)];
+        let a = SegLanes::<V>::load(std::array::from_fn(|k| segs[pair(k).0 as usize].as_ref()));
+        let b = SegLanes::<V>::load(std::array::from_fn(|k| segs[pair(k).1 as usize].as_ref()));
+        let (xa, da, la) = (a.x, a.d, a.len2);
+        let (xb, db, le) = (b.x, b.d, b.len2);
 
         // closest_params(xpa, da, la, xpb, db, le)
         let r = [xa[0].sub(xb[0]), xa[1].sub(xb[1]), xa[2].sub(xb[2])];
@@ -279,7 +281,7 @@ fn kernel<V: Lanes>(batch: &PairBatch, p: &PairParams, out: &mut PairOut) {
         let t = V::select(below, zero, V::select(above, one, t0));
 
         // contact(a, b, p)
-        let rsum = V::load(at(&a.radius, i)).add(V::load(at(&b.radius, i)));
+        let rsum = a.radius.add(b.radius);
         let p1 = [
             xa[0].add(da[0].mul(s)),
             xa[1].add(da[1].mul(s)),
@@ -296,13 +298,13 @@ fn kernel<V: Lanes>(batch: &PairBatch, p: &PairParams, out: &mut PairOut) {
         let hit = dist2.lt(r2);
         // A NaN distance or radius: the scalar routine's `dist2 >= r * r` is false there.
         rare = V::or(rare, V::not(V::or(hit, dist2.ge(r2))));
-        let (ma, mb) = (V::load(at(&a.mass, i)), V::load(at(&b.mass, i)));
+        let (ma, mb) = (a.mass, b.mass);
         rare = V::or(rare, V::not(V::or(ma.le(mb), ma.gt(mb))));
         let m = ma.min_sel(mb);
 
         // Eq. 1: viscous friction at the closest points.
-        let (vpa, vca) = (load3::<V>(&a.vp, i), load3::<V>(&a.vc, i));
-        let (vpb, vcb) = (load3::<V>(&b.vp, i), load3::<V>(&b.vc, i));
+        let (vpa, vca) = (a.vp, a.vc);
+        let (vpb, vcb) = (b.vp, b.vc);
         let (ws, wt) = (one.sub(s), one.sub(t));
         let v1: [V; 3] = std::array::from_fn(|k| vpa[k].mul(ws).add(vca[k].mul(s)));
         let v2: [V; 3] = std::array::from_fn(|k| vpb[k].mul(wt).add(vcb[k].mul(t)));
@@ -340,11 +342,7 @@ fn kernel<V: Lanes>(batch: &PairBatch, p: &PairParams, out: &mut PairOut) {
         i += 4;
     }
     // Lanes past the end are garbage: clear their bits.
-    let live = if batch.len >= 64 {
-        u64::MAX
-    } else {
-        (1u64 << batch.len) - 1
-    };
+    let live = if n >= 64 { u64::MAX } else { (1u64 << n) - 1 };
     out.hit = hit_all & live;
     out.rare = rare_all & live;
 }

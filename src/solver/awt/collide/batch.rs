@@ -1,9 +1,9 @@
-//! The batched narrow phase: the pairs that pass the cheap filters are queued in
-//! structure-of-arrays form and tested [`BATCH`] at a time by `crate::simd::pairs` (four lanes
-//! at once), which finds the same contacts with the same forces as [`contact`], bit for bit; the
+//! The batched narrow phase: the pairs that pass the cheap filters are queued as index pairs
+//! and tested [`BATCH`] at a time by `crate::simd::pairs` (four lanes at once, read straight
+//! from the [`SegPre`] records), which finds the same contacts with the same forces as [`contact`], bit for bit; the
 //! few pairs outside its general case are handed back and done by [`contact`] itself.
 
-use crate::simd::pairs::{self, PairBatch, PairOut, PairParams, BATCH};
+use crate::simd::pairs::{self, PairOut, PairParams, BATCH};
 
 use super::*;
 
@@ -17,16 +17,16 @@ pub(super) struct SegEnds {
     pub(super) inv_child: f64,
 }
 
-/// Queued pairs and the lanes' results; lives on the searching thread's stack (about 20 kB).
+/// Queued pairs and the lanes' results; lives on the searching thread's stack (about 5 kB).
 ///
 /// Each contact found also adds its shares to the per-node loads of [`Response`] at once,
 /// while its data is still in the cache (a second pass over the contact list, tens of
 /// thousands of 48-byte entries, used to cost a tenth of the stage).
 pub(super) struct Batched<'a> {
-    lanes: PairBatch,
     out: PairOut,
-    /// The pairs of the lanes, as indices into the per-segment data.
+    /// The queued pairs, as indices into the per-segment data; `ids[..len]`.
     ids: [(u32, u32); BATCH],
+    len: usize,
     params: PairParams,
     /// Per node slot: 1 / mass (see [`Broad`]).
     ends: &'a [SegEnds],
@@ -39,9 +39,9 @@ impl<'a> Batched<'a> {
         Batched {
             ends,
             loads,
-            lanes: PairBatch::default(),
             out: PairOut::default(),
             ids: [(0, 0); BATCH],
+            len: 0,
             params: PairParams {
                 friction: p.friction,
                 repulsion: p.repulsion,
@@ -62,9 +62,9 @@ impl<'a> Batched<'a> {
         p: &ContactParams,
         out: &mut Vec<Contact>,
     ) {
-        let i = self.lanes.len();
-        self.ids[i] = (a as u32, b as u32);
-        if self.lanes.push(&pre[a].lane, &pre[b].lane) {
+        self.ids[self.len] = (a as u32, b as u32);
+        self.len += 1;
+        if self.len == BATCH {
             self.flush((boxes, pre), p, out);
         }
     }
@@ -76,13 +76,13 @@ impl<'a> Batched<'a> {
         p: &ContactParams,
         out: &mut Vec<Contact>,
     ) {
-        let n = self.lanes.len();
+        let n = self.len;
         if n == 0 {
             return;
         }
-        pairs::narrow(&self.lanes, &self.params, &mut self.out);
+        pairs::narrow(pre, &self.ids[..n], &self.params, &mut self.out);
         self.emit(n, (boxes, pre), p, out);
-        self.lanes.clear();
+        self.len = 0;
     }
 
     /// Adds a contact's shares to the loads of its four nodes ([`Response::record`]).
@@ -129,7 +129,7 @@ impl<'a> Batched<'a> {
                 }
             };
             // The lighter child's mass, as `Response::record` takes it.
-            let m = self.lanes.a.mass[i].min(self.lanes.b.mass[i]);
+            let m = pre[a as usize].lane.mass.min(pre[b as usize].lane.mass);
             self.record((a, b), m, c.s, c.t);
             out.push(c);
         }
@@ -147,14 +147,12 @@ impl<'a> Batched<'a> {
         out: &mut Vec<Contact>,
     ) {
         for chunk in pairs_ab.chunks(BATCH) {
-            for &(a, b) in chunk {
-                let i = self.lanes.len();
-                self.ids[i] = (a as u32, b as u32);
-                self.lanes.push(&pre[a].lane, &pre[b].lane);
+            for (id, &(a, b)) in self.ids.iter_mut().zip(chunk) {
+                *id = (a as u32, b as u32);
             }
-            pairs::narrow_on(level, &self.lanes, &self.params, &mut self.out);
-            self.emit(chunk.len(), (boxes, pre), p, out);
-            self.lanes.clear();
+            let n = chunk.len();
+            pairs::narrow_on(level, pre, &self.ids[..n], &self.params, &mut self.out);
+            self.emit(n, (boxes, pre), p, out);
         }
     }
 }
@@ -190,15 +188,15 @@ mod tests {
 
     fn seg(rng: &mut Rng, i: u32, xp: Vector3<f64>, d: Vector3<f64>, radius: f64) -> SegPre {
         SegPre {
-            lane: Segment {
-                x: xp.into(),
-                d: d.into(),
-                len2: d.norm_squared(),
-                vp: rng.vec(0.5).into(),
-                vc: rng.vec(0.5).into(),
+            lane: Segment::new(
+                xp.into(),
+                d.into(),
+                d.norm_squared(),
+                rng.vec(0.5).into(),
+                rng.vec(0.5).into(),
                 radius,
-                mass: rng.range(1e-5, 2e-3),
-            },
+                rng.range(1e-5, 2e-3),
+            ),
             xc: xp + d,
             seg: i,
         }
@@ -306,8 +304,9 @@ mod tests {
 
     #[test]
     fn batched_narrow_phase_matches_the_scalar_one_bit_for_bit() {
-        let pre = pairs(10_000, 25);
-        let idx: Vec<(usize, usize)> = (0..10_000).map(|k| (2 * k, 2 * k + 1)).collect();
+        // 10,003 pairs: the last batch (19 pairs) ends inside a group of four lanes.
+        let pre = pairs(10_003, 25);
+        let idx: Vec<(usize, usize)> = (0..10_003).map(|k| (2 * k, 2 * k + 1)).collect();
         for (thr, dt) in [(0.5f64, 0.01), (0.9, 0.01), (1.5, 1e-13), (0.0, 0.004)] {
             let p = ContactParams {
                 friction: 40.0,
@@ -359,14 +358,11 @@ mod tests {
         let (ends, mut loads) = (ends_of(&boxes_of(&pre)), vec![0.0; 2 * pre.len()]);
         let mut b = Batched::new(&p, &ends, &mut loads);
         let (mut rare, mut total) = (0, 0);
-        for chunk in (0..4_096).collect::<Vec<_>>().chunks(BATCH) {
-            for &k in chunk {
-                b.lanes.push(&pre[2 * k].lane, &pre[2 * k + 1].lane);
-            }
-            pairs::narrow_on(Level::Portable, &b.lanes, &b.params, &mut b.out);
+        let idx: Vec<(u32, u32)> = (0..4_096).map(|k| (2 * k, 2 * k + 1)).collect();
+        for chunk in idx.chunks(BATCH) {
+            pairs::narrow_on(Level::Portable, &pre, chunk, &b.params, &mut b.out);
             rare += b.out.rare.count_ones();
             total += chunk.len();
-            b.lanes.clear();
         }
         // Kinds 3 and 5 of `pairs` (a quarter of them) are degenerate on purpose; 22 % are
         // handed back with this seed.

@@ -15,8 +15,8 @@
 //!   or two threads (the project's pool, [`crate::par::Pool`]);
 //! * `grid.rs`: the broad phase, a uniform voxel grid of segment boxes;
 //! * `narrow.rs`: per-segment data, the cheap filters and the closest points of two segments;
-//! * `batch.rs`: the candidate pairs in structure-of-arrays form, tested in vector lanes by
-//!   [`crate::simd::pairs`];
+//! * `batch.rs`: the candidate pairs queued as index pairs, tested in vector lanes by
+//!   [`crate::simd::pairs`], which reads the segments straight from their [`SegPre`] records;
 //! * `response.rs`: friction and repulsion from the contacts, split onto the nodes;
 //! * `body.rs`: the body spheres;
 //! * `reference.rs`: [`accumulate_brute_force`], the all-pairs reference the tests compare
@@ -92,7 +92,14 @@
 //!   segments: the stage is bound by the work per tested pair (≈ 42 ns, ≈ 130 cycles, of
 //!   which about a third is the candidate loop's filters and branches, a fifth the closest
 //!   points, a quarter writing and reading back the 1.1 M contacts (53 MB a step, more than
-//!   the L3 cache) and the rest copying into the lanes).
+//!   the L3 cache) and the rest copying into the lanes). That copy is gone since 2026-12-06:
+//!   the lanes now load four segment records and transpose them in registers
+//!   (`crate::simd::pairs`), the stage 1.16× faster (`examples/interactions.rs short
+//!   --motion shake`, one thread: 10.3 → 8.8 ms a call for 224–240 k tested pairs).
+//!   Moving the relative-motion test into the lanes too, so the scalar loop only tests the
+//!   boxes, made the live `long` × `shake` row 2.3× slower (`bench --live`, same contacts):
+//!   the scalar test rejects the still pairs before the lanes pay for them (on `short`, 58 %
+//!   of the candidates fail the box test or the motion test).
 //! * **Filters are conservative and shared.** Box overlap (each box inflated by its own radius
 //!   and rounded outwards to f32, so two boxes overlap whenever the segments are within
 //!   `r1 + r2` on every axis), adjacency and the

@@ -85,6 +85,14 @@ pub(super) struct SegPre {
     pub(super) seg: u32,
 }
 
+/// The batched narrow phase reads the [`Segment`] inside the record.
+impl AsRef<Segment> for SegPre {
+    #[inline(always)]
+    fn as_ref(&self) -> &Segment {
+        &self.lane
+    }
+}
+
 impl SegPre {
     #[inline]
     pub(super) fn new(
@@ -97,15 +105,15 @@ impl SegPre {
         let (xp, xc) = (pos[parent], pos[child]);
         let d = xc - xp;
         SegPre {
-            lane: Segment {
-                x: xp.into(),
-                d: d.into(),
-                len2: d.norm_squared(),
-                vp: vel[parent].into(),
-                vc: vel[child].into(),
-                radius: segs.radius[i],
-                mass: segs.child_mass[i],
-            },
+            lane: Segment::new(
+                xp.into(),
+                d.into(),
+                d.norm_squared(),
+                vel[parent].into(),
+                vel[child].into(),
+                segs.radius[i],
+                segs.child_mass[i],
+            ),
             xc,
             seg: i as u32,
         }
