@@ -19,6 +19,7 @@
 //! This module uses nothing of wisptree's: solvers and renderers call it, with plain arrays.
 
 pub mod blend;
+pub mod boxes;
 pub mod cull;
 pub mod dispatch;
 pub mod lanes;

@@ -105,6 +105,7 @@ impl HairCollider {
         };
         let broad = Broad {
             boxes: Vec::with_capacity(segments),
+            reach: Vec::with_capacity(segments),
             pre: Vec::with_capacity(segments),
             lo: Vec::with_capacity(segments),
             hi: Vec::with_capacity(segments),
@@ -187,6 +188,7 @@ impl HairCollider {
             .map(|o| lock(o).contacts.capacity() * std::mem::size_of::<Contact>())
             .sum();
         b.boxes.capacity() * std::mem::size_of::<SegBox>()
+            + b.reach.capacity() * std::mem::size_of::<Reach>()
             + b.pre.capacity() * std::mem::size_of::<SegPre>()
             + (b.lo.capacity() + b.hi.capacity()) * std::mem::size_of::<[u32; 3]>()
             + (b.cell_start.capacity() + b.items.capacity()) * 4
@@ -220,6 +222,8 @@ impl HairCollider {
             let b = &mut self.broad;
             b.boxes.clear();
             b.boxes.extend((0..n).map(|i| SegBox::new(segs, pos, i)));
+            b.reach.clear();
+            b.reach.extend(b.boxes.iter().map(Reach::far));
             b.pre.clear();
             b.pre.extend((0..n).map(|i| SegPre::new(segs, pos, vel, i)));
             b.build();

@@ -68,7 +68,13 @@
 //!   the noise of one another. The dense array is capped at [`CELLS_PER_SEGMENT`] cells per
 //!   segment (clearing and scanning it cost per cell) and at [`MAX_CELLS`] in all (the cell side
 //!   grows instead), which bounds time and memory when a node flies away.
-//! * **The candidate loop stays scalar.** Testing a voxel's segments eight pairs at a time (box,
+//! * **The candidate loop stays scalar**, but for its box test: each segment's box is kept
+//!   beside the [`SegBox`]es as an aligned [`Reach`] (bounds arranged so that "apart on some
+//!   axis" is one lane-by-lane `>` of eight f32, two SSE compares in `crate::simd::boxes`),
+//!   and the node slots are read only when the boxes overlap: 3–4 % off the stage (2026-12-06,
+//!   `examples/interactions.rs long short long_curly --motion shake`, alternated three times:
+//!   long 10.9–11.3 → 10.6–10.7 ms, long_curly at split 0.05 57.5–58.5 → 55.3–56.3 ms at 3 s).
+//!   The rest of this point is older. Testing a voxel's segments eight pairs at a time (box,
 //!   adjacency and relative-motion tests in AVX2 lanes over a per-voxel copy) was tried and
 //!   measured no faster, under `lean` and under `shake` at split threshold 0.05 alike: the
 //!   mask test rejects most visits for a few instructions, and the cost is in the pairs that
@@ -96,10 +102,13 @@
 //!   the lanes now load four segment records and transpose them in registers
 //!   (`crate::simd::pairs`), the stage 1.16× faster (`examples/interactions.rs short
 //!   --motion shake`, one thread: 10.3 → 8.8 ms a call for 224–240 k tested pairs).
-//!   Moving the relative-motion test into the lanes too, so the scalar loop only tests the
-//!   boxes, made the live `long` × `shake` row 2.3× slower (`bench --live`, same contacts):
-//!   the scalar test rejects the still pairs before the lanes pay for them (on `short`, 58 %
-//!   of the candidates fail the box test or the motion test).
+//!   Moving the relative-motion test into the lanes too (the scalar loop then only tests
+//!   the boxes), with or without prefetching each queued pair's records, measured within
+//!   ±3 % of this (same runs; under `shake` every pair whose boxes overlap moves, so that
+//!   test rejects nothing there and only moves the first read of the records); aligning each
+//!   record to a cache line, 1 %. Neither landed. (A first try of the former read 2.3× slower
+//!   because a closure in the generic kernel was not compiled for AVX2: helpers the kernel
+//!   calls must be `#[inline(always)]` functions, not closures.)
 //! * **Filters are conservative and shared.** Box overlap (each box inflated by its own radius
 //!   and rounded outwards to f32, so two boxes overlap whenever the segments are within
 //!   `r1 + r2` on every axis), adjacency and the

@@ -3,6 +3,7 @@
 use nalgebra::Vector3;
 
 use super::*;
+use crate::simd::boxes::BoxTest;
 use crate::simd::pairs::Segment;
 
 #[inline]
@@ -62,14 +63,54 @@ pub(super) fn near(a: &SegBox, b: &SegBox) -> bool {
         | (b.lo[1] > a.hi[1])
         | (a.lo[2] > b.hi[2])
         | (b.lo[2] > a.hi[2]);
-    // Adjacent segments (a chain, or siblings on one parent) always touch, and the segments
-    // of one GC are pieces of one wisp: never test them.
-    let adjacent = (a.parent == b.parent)
+    !(apart | adjacent(a, b))
+}
+
+/// Adjacent segments (a chain, or siblings on one parent) always touch, and the segments of one
+/// GC are pieces of one wisp: never test them.
+#[inline(always)]
+pub(super) fn adjacent(a: &SegBox, b: &SegBox) -> bool {
+    (a.parent == b.parent)
         | (a.parent == b.child)
         | (a.child == b.parent)
         | (a.child == b.child)
-        | (a.chain == b.chain);
-    !(apart | adjacent)
+        | (a.chain == b.chain)
+}
+
+/// A [`SegBox`]'s six bounds arranged so that the box test of [`near`] is one lane-by-lane
+/// comparison of eight f32: with `Reach::corner(a) = (lo, −hi, −∞, −∞)` and
+/// `Reach::far(b) = (hi, −lo, +∞, +∞)`, lane `k < 3` says `a.lo > b.hi` and lane `3 + k` says
+/// `−a.hi > −b.lo`, i.e. `b.lo > a.hi` (negation is exact, and NaN compares false either way),
+/// so [`apart`] is exactly the box half of [`near`]. The candidate loop reads one aligned
+/// 32-byte [`Reach`] per candidate, and the node slots ([`adjacent`]) only for the boxes that
+/// overlap ([`crate::simd::boxes`] makes the comparison two SSE compares and a mask).
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[repr(C, align(32))]
+pub(super) struct Reach(pub(super) [f32; 8]);
+
+impl Reach {
+    /// `(lo, −hi, −∞, −∞)`: the side of the box compared.
+    #[inline(always)]
+    pub(super) fn corner(b: &SegBox) -> Self {
+        let (lo, hi) = (b.lo, b.hi);
+        let inf = f32::INFINITY;
+        Reach([lo[0], lo[1], lo[2], -hi[0], -hi[1], -hi[2], -inf, -inf])
+    }
+
+    /// `(hi, −lo, +∞, +∞)`: the side of the box compared against.
+    #[inline(always)]
+    pub(super) fn far(b: &SegBox) -> Self {
+        let (lo, hi) = (b.lo, b.hi);
+        let inf = f32::INFINITY;
+        Reach([hi[0], hi[1], hi[2], -lo[0], -lo[1], -lo[2], inf, inf])
+    }
+}
+
+/// Whether the boxes of `corner` (a [`Reach::corner`]) and `far` (a [`Reach::far`]) are apart
+/// on some axis: the box half of [`near`], on the instruction set `I`.
+#[inline(always)]
+pub(super) fn apart<I: BoxTest>(corner: &Reach, far: &Reach) -> bool {
+    I::any_greater8(&corner.0, &far.0)
 }
 
 /// One segment's data for the relative-motion test and the closest points, gathered once per
@@ -258,6 +299,65 @@ pub use crate::solver::common::closest_segment_params;
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The candidate loop's split test (`apart` on the [`Reach`]es, then `adjacent`) is `near`,
+    /// on both twins, for boxes apart, touching, overlapping, inside one another, and with
+    /// NaN or infinite bounds.
+    #[test]
+    fn reach_and_adjacency_are_near_on_both_twins() {
+        use crate::simd::dispatch::{Avx2, Portable};
+        let vals = [
+            -1.0f32,
+            0.0,
+            -0.0,
+            0.25,
+            0.5,
+            1.0,
+            f32::NAN,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+        ];
+        let mut seed = 0x2545_f491_4f6c_dd1du64;
+        let mut pick = |n: usize| {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed % n as u64) as usize
+        };
+        let (mut near_count, mut total) = (0, 0);
+        for _ in 0..20_000 {
+            let mut bx = || {
+                let lo: [f32; 3] = std::array::from_fn(|_| vals[pick(6)]);
+                let hi: [f32; 3] = std::array::from_fn(|k| {
+                    if pick(50) == 0 {
+                        vals[6 + pick(3)]
+                    } else {
+                        lo[k] + [0.0, 0.25, 0.5, 1.0][pick(4)]
+                    }
+                });
+                SegBox {
+                    lo,
+                    hi,
+                    parent: pick(6) as u32,
+                    child: 6 + pick(6) as u32,
+                    chain: pick(8) as u32,
+                }
+            };
+            let (a, b) = (bx(), bx());
+            let want = near(&a, &b);
+            let (corner, far) = (Reach::corner(&a), Reach::far(&b));
+            let portable = !(apart::<Portable>(&corner, &far) || adjacent(&a, &b));
+            let sse = !(apart::<Avx2>(&corner, &far) || adjacent(&a, &b));
+            assert_eq!(portable, want, "{:?} {:?}", a.lo, b.lo);
+            assert_eq!(sse, want, "{:?} {:?}", a.lo, b.lo);
+            near_count += usize::from(want);
+            total += 1;
+        }
+        assert!(
+            near_count > total / 20 && near_count < total * 19 / 20,
+            "{near_count} of {total}"
+        );
+    }
 
     #[test]
     pub(super) fn closest_params_cross() {
