@@ -100,8 +100,13 @@ struct SegLanes<V> {
 impl<V: Lanes> SegLanes<V> {
     /// Lane `k` is `segs[k]`.
     #[inline(always)]
-    fn load(segs: [&Segment; 4]) -> Self {
-        let rows = segs.map(Segment::rows);
+    fn load<T: AsRef<Segment>>(segs: [&T; 4]) -> Self {
+        let rows = [
+            segs[0].as_ref().rows(),
+            segs[1].as_ref().rows(),
+            segs[2].as_ref().rows(),
+            segs[3].as_ref().rows(),
+        ];
         let [x0, x1, x2, len2] = V::transpose([&rows[0][0], &rows[1][0], &rows[2][0], &rows[3][0]]);
         let [d0, d1, d2, radius] =
             V::transpose([&rows[0][1], &rows[1][1], &rows[2][1], &rows[3][1]]);
@@ -226,6 +231,20 @@ fn dot<V: Lanes>(u: &[V; 3], v: &[V; 3]) -> V {
     u[0].mul(v[0]).add(u[1].mul(v[1])).add(u[2].mul(v[2]))
 }
 
+/// The pairs of lanes `i..i + 4` as indices; lanes past the end repeat the last pair (the
+/// kernel clears their bits). A function, not a closure in the kernel: a closure is not
+/// compiled for AVX2 with the function it sits in unless the compiler happens to inline it.
+#[inline(always)]
+fn lane_pairs(pairs: &[(u32, u32)], i: usize) -> [(usize, usize); 4] {
+    let last = pairs.len() - 1;
+    let mut out = [(0, 0); 4];
+    for (k, o) in out.iter_mut().enumerate() {
+        let (a, b) = pairs[(i + k).min(last)];
+        *o = (a as usize, b as usize);
+    }
+    out
+}
+
 /// The operation, once for both twins. Every line mirrors a line of the scalar routines
 /// (`closest_params` and `contact` in `solver::awt::collide::narrow`).
 #[inline(always)]
@@ -244,10 +263,9 @@ fn kernel<V: Lanes, T: AsRef<Segment>>(
     let n = pairs.len();
     let mut i = 0;
     while i < n {
-        // Lanes past the end repeat the last pair; their bits are cleared below.
-        let pair = |k: usize| pairs[(i + k).min(n - 1)];
-        let a = SegLanes::<V>::load(std::array::from_fn(|k| segs[pair(k).0 as usize].as_ref()));
-        let b = SegLanes::<V>::load(std::array::from_fn(|k| segs[pair(k).1 as usize].as_ref()));
+        let [p0, p1, p2, p3] = lane_pairs(pairs, i);
+        let a = SegLanes::<V>::load([&segs[p0.0], &segs[p1.0], &segs[p2.0], &segs[p3.0]]);
+        let b = SegLanes::<V>::load([&segs[p0.1], &segs[p1.1], &segs[p2.1], &segs[p3.1]]);
         let (xa, da, la) = (a.x, a.d, a.len2);
         let (xb, db, le) = (b.x, b.d, b.len2);
 

@@ -43,9 +43,10 @@ pub(super) struct WorkerOut {
 /// ranges starts: there the two masks have no bit in common. So the "tested once" rule is one AND
 /// on data already in the cell list, without a pair set or a lookup of the ranges.
 ///
-/// Per-segment data is split by temperature: the pair loop reads only [`SegBox`] (36 bytes, the
-/// whole scene fits in L1), and [`SegPre`] (positions, velocities, f64) only for the pairs that
-/// pass the box and adjacency tests.
+/// Per-segment data is split by temperature: the pair loop reads a [`Reach`] (the box, 32
+/// aligned bytes) for every candidate, the [`SegBox`]'s node slots only when the boxes overlap,
+/// and [`SegPre`] (positions, velocities, f64) only for the pairs that pass the box and
+/// adjacency tests.
 ///
 /// **Two threads, same result.** The cells are cut into [`CHUNKS`] runs of about equal work,
 /// and with [`Self::set_threads`]`(2)` the caller and the pool's helper claim them until none

@@ -71,7 +71,7 @@ impl GridInfo {
 /// The grid and the per-segment data, written by the caller, then read by both threads.
 #[derive(Default)]
 pub(super) struct Broad {
-    /// Per segment: inflated box and node slots (hot).
+    /// Per segment: inflated box and node slots (the slots read for overlapping boxes).
     pub(super) boxes: Vec<SegBox>,
     /// Per segment: [`Reach::far`] of its box, what the candidate loop compares (hot).
     pub(super) reach: Vec<Reach>,

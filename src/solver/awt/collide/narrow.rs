@@ -327,7 +327,13 @@ mod tests {
         let (mut near_count, mut total) = (0, 0);
         for _ in 0..20_000 {
             let mut bx = || {
-                let lo: [f32; 3] = std::array::from_fn(|_| vals[pick(6)]);
+                let lo: [f32; 3] = std::array::from_fn(|_| {
+                    if pick(50) == 0 {
+                        vals[6 + pick(3)]
+                    } else {
+                        vals[pick(6)]
+                    }
+                });
                 let hi: [f32; 3] = std::array::from_fn(|k| {
                     if pick(50) == 0 {
                         vals[6 + pick(3)]
