@@ -339,19 +339,30 @@ fn kernel<V: Lanes, T: AsRef<Segment>>(
         let len2 = la.mul(le);
         rare = V::or(rare, V::not(len2.gt(zero)));
         let crossing = bb.mul(bb).lt(thr2.mul(len2));
-        let d = dist2.sqrt();
-        // Intersecting axes: the normal is the cross product's (scalar routine).
-        rare = V::or(
-            rare,
-            V::and(crossing, V::not(d.gt(V::splat(1e-9).mul(rsum)))),
-        );
-        let n = [delta[0].div(d), delta[1].div(d), delta[2].div(d)];
-        let dv = [v1[0].sub(v2[0]), v1[1].sub(v2[1]), v1[2].sub(v2[2])];
-        let approach = dot(&dv, &n).neg();
-        let push = kr.mul(m).mul(rsum.sub(d)).min_sel(m.mul(approach).div(dtf));
-        let on = V::and(crossing, approach.gt(zero));
-        for (nk, rep) in n.iter().zip(out.repulsion.iter_mut()) {
-            V::select(on, nk.mul(push), zero).store(at_mut(rep, i));
+        // Most wisps in contact are near parallel (friction only): a group of four with no
+        // crossing pair in contact skips the normal's root and four divisions. Its repulsion
+        // is zero, as the full computation stores; a crossing lane that is not in contact is
+        // then not marked rare, which changes nothing: the scalar routine returns no contact
+        // for it either (`dist2 >= r * r`; a NaN distance is marked rare above).
+        if V::bits(V::and(crossing, hit)) == 0 {
+            for rep in out.repulsion.iter_mut() {
+                zero.store(at_mut(rep, i));
+            }
+        } else {
+            let d = dist2.sqrt();
+            // Intersecting axes: the normal is the cross product's (scalar routine).
+            rare = V::or(
+                rare,
+                V::and(crossing, V::not(d.gt(V::splat(1e-9).mul(rsum)))),
+            );
+            let n = [delta[0].div(d), delta[1].div(d), delta[2].div(d)];
+            let dv = [v1[0].sub(v2[0]), v1[1].sub(v2[1]), v1[2].sub(v2[2])];
+            let approach = dot(&dv, &n).neg();
+            let push = kr.mul(m).mul(rsum.sub(d)).min_sel(m.mul(approach).div(dtf));
+            let on = V::and(crossing, approach.gt(zero));
+            for (nk, rep) in n.iter().zip(out.repulsion.iter_mut()) {
+                V::select(on, nk.mul(push), zero).store(at_mut(rep, i));
+            }
         }
         s.store(at_mut(&mut out.s, i));
         t.store(at_mut(&mut out.t, i));
