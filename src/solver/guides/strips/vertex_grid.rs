@@ -5,6 +5,19 @@
 //! about ten cells, while a vertex sits in one. Listing the triangles in every cell they touch
 //! meant sorting some 60,000 entries per step on Short; listing the vertices means sorting
 //! 3,000 by counting, and a triangle's cells along z are one run of the sorted vertices.
+//!
+//! Where the time goes, and two things tried that did not help (2026-12-06, `wisptree bench
+//! --live --rows guides`, each variant alternated with the build it started from, the results
+//! the same bit for bit). A triangle visits 3–4 columns of cells and tests 110–160 vertices
+//! in 15–21 groups of eight to keep about 5 (3–5 %; Short under `lean`, Long curly under
+//! `shake`, about 7,000 triangles a step): a strip's triangle is wide, tilted and thin, so
+//! its box holds far more vertices than the slab within `reach` of it. Cells half as large
+//! (vertex cells a fraction of the segments') halved the vertices tested and cut the groups
+//! by 20–40 %, yet the 20 guide rows' real-time factors moved by a median of 1.02 (0.89–1.14,
+//! two runs each): the per-triangle set-up (its prism, box and direction) and the extra
+//! column look-ups take what the groups gave back. Building the search, the contacts and
+//! the articulated-body runs a second time for AVX2 (`crate::simd::dispatch::multiversion`)
+//! gave a median of 1.02 (0.91–1.16, three runs each). Neither landed.
 
 use super::broad::{f32_down, f32_up, tail_mask, Prism};
 use super::*;
