@@ -167,6 +167,7 @@ impl ChainRun<'_> {
     /// Forward kinematics of guide `g`: link rotations, vertex positions and velocities, link
     /// spatial velocities, from the joint state and the head. Linear in the chain length
     /// (§3.1: "the whole chain can be evaluated in linear time").
+    #[inline(always)]
     pub fn fk(&mut self, g: usize, base: &Base, root: &Vector3<f64>) {
         let n = self.n;
         let (v0, l0) = self.local(g);
@@ -204,6 +205,7 @@ impl ChainRun<'_> {
     /// time), then one semi-implicit Euler step of length `h`: the rates first, then each joint
     /// turned by `exp(h (ȧ, 0, ḃ))` about its current axes. Uses the kinematics of the last
     /// [`Chains::fk`] of this guide and its vertex forces `f`.
+    #[inline(always)]
     pub fn integrate(&mut self, g: usize, base: &Base, h: f64) {
         let n = self.n;
         let (v0, l0) = self.local(g);
@@ -265,6 +267,7 @@ impl ChainRun<'_> {
     /// each joint takes the rates that give its end vertex the velocity `vel` perpendicular to
     /// the segment (the component along it is fixed by the segment's length), root to tip.
     /// Call [`Chains::fk`] next.
+    #[inline(always)]
     pub fn set_state(&mut self, g: usize, base: &Base, pts: &[Vector3<f64>], vel: &[Vector3<f64>]) {
         let n = self.n;
         let (v0, l0) = self.local(g);

@@ -113,6 +113,9 @@ pub struct GuideSolver {
     /// The threads of the strips' broad phase and contacts (none: the calling thread only).
     /// The result does not depend on it.
     pool: Option<crate::par::Pool>,
+    /// The instruction set of the strips' pieces and the guides' runs (`None`: the process's,
+    /// [`crate::simd::level`]). The result does not depend on it; tests pin it.
+    simd_level: Option<crate::simd::Level>,
 }
 
 /// The head's spatial velocity `(ω; v_O)` at the world origin.
@@ -194,6 +197,7 @@ impl GuideSolver {
             mid: Vec::new(),
             pair_d0: Vec::new(),
             strips: Strips::default(),
+            simd_level: None,
             links: Links::default(),
             dense: Dense::new(&model, gp.blend),
             dense_stale: true,
@@ -287,6 +291,15 @@ impl GuideSolver {
     /// Threads of the strips' broad phase and contacts.
     pub fn pool_threads(&self) -> usize {
         self.pool.as_ref().map_or(1, |p| p.workers())
+    }
+
+    /// Runs the strips' pieces and the guides' runs on the build of `level` (`None`: the
+    /// process's, [`crate::simd::level`]), so that tests compare the AVX2 build with the
+    /// portable one; the result is the same bit for bit.
+    #[doc(hidden)]
+    pub fn set_simd_level(&mut self, level: Option<crate::simd::Level>) {
+        self.simd_level = level;
+        self.strips.set_simd_level(level);
     }
 
     /// Sets slot `g` up from its rest polyline.
@@ -506,6 +519,7 @@ impl GuideSolver {
             friction: self.gp.body_friction,
         };
         let (pushed, splits) = advance::advance_guides(
+            self.simd_level.unwrap_or_else(crate::simd::level),
             &mut self.chains,
             &self.alive,
             self.pool.as_ref(),

@@ -2,6 +2,7 @@
 //! vertex–triangle pairs from a uniform grid, cut into fixed pieces for the pool's threads.
 
 use super::*;
+use crate::simd::dispatch::multiversion;
 
 impl Strips {
     /// Broad phase: finds segment–segment pairs of different guides whose boxes, each grown
@@ -28,13 +29,10 @@ impl Strips {
         fill_tangents(chains, alive, &mut self.tangents);
         self.prepare(pool, chains, alive, reach);
         let this = &*self;
+        let level = self.level();
         for_each_on(pool, CHUNKS, &|c| {
             let mut guard = this.chunks[c].lock().unwrap_or_else(|e| e.into_inner());
-            let chunk = &mut *guard;
-            chunk.seg.clear();
-            chunk.vt.clear();
-            this.seg_piece(c, n, &mut chunk.seg);
-            this.tri_piece(c, chains, reach, &mut chunk.vt);
+            search_piece(level, this, c, n, chains, reach, &mut guard);
         });
         self.gather(chains.x.len());
     }
@@ -172,6 +170,7 @@ impl Strips {
     /// Piece `c` of the segment pairs: the cells whose runs start in its share of the sorted
     /// entries. Each pair is tested in the one cell holding the low corner of their boxes'
     /// overlap.
+    #[inline(always)]
     pub(super) fn seg_piece(&self, c: usize, n: usize, out: &mut Vec<(u32, u32)>) {
         let entries = &self.entries;
         let run_start = |i: usize| {
@@ -231,6 +230,25 @@ impl Strips {
             }
             s = e;
         }
+    }
+}
+
+multiversion! {
+    /// Piece `c` of [`Strips::detect_on`]'s candidates, built for AVX2 too (see
+    /// `crate::simd::dispatch`): the box, crossing and prism tests run eight at a time in
+    /// `f32`, which an AVX2 build does in one register instead of two, with the same bits.
+    fn search_piece(
+        this: &Strips,
+        c: usize,
+        n: usize,
+        chains: &Chains,
+        reach: f64,
+        chunk: &mut Chunk,
+    ) {
+        chunk.seg.clear();
+        chunk.vt.clear();
+        this.seg_piece(c, n, &mut chunk.seg);
+        this.tri_piece(c, chains, reach, &mut chunk.vt);
     }
 }
 

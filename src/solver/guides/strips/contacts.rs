@@ -2,6 +2,7 @@
 //! a strongly damped repulsive spring scaled by the crossing, and viscous friction.
 
 use super::*;
+use crate::simd::dispatch::multiversion;
 
 impl Strips {
     /// Adds the contact forces of the candidates closer than `p.contact_distance` to the
@@ -20,14 +21,10 @@ impl Strips {
         }
         let this = &*self;
         let ch = &*chains;
+        let level = self.level();
         for_each_on(pool, CHUNKS, &|c| {
             let mut guard = this.chunks[c].lock().unwrap_or_else(|e| e.into_inner());
-            let chunk = &mut *guard;
-            chunk.tri_hits.clear();
-            chunk.seg_hits.clear();
-            chunk.count = 0;
-            this.tri_contacts(c, ch, p, chunk);
-            this.seg_contacts(c, ch, p, chunk);
+            contacts_piece(level, this, c, ch, p, &mut guard);
         });
         self.add_forces(chains)
     }
@@ -55,33 +52,10 @@ impl Strips {
         self.tri_start.clear();
         let this = &*self;
         let ch = &*chains;
+        let level = self.level();
         for_each_on(pool, CHUNKS, &|c| {
             let mut guard = this.chunks[c].lock().unwrap_or_else(|e| e.into_inner());
-            let chunk = &mut *guard;
-            chunk.tri_hits.clear();
-            chunk.seg_hits.clear();
-            chunk.count = 0;
-            // The triangles of the piece in order, each with its vertices in index order (as
-            // the listed candidates are grouped).
-            let mut vt = std::mem::take(&mut chunk.vt);
-            let mut verts = std::mem::take(&mut chunk.verts);
-            vt.clear();
-            this.tri_piece(c, ch, reach, &mut vt);
-            for group in vt.chunk_by(|a, b| a.1 == b.1) {
-                verts.clear();
-                verts.extend(group.iter().map(|&(v, _)| v));
-                verts.sort_unstable();
-                // `tri_piece` kept only vertices within `reach` of the triangle's prism and box,
-                // at these very positions: the bounds would turn none of them down.
-                this.triangle_hits(group[0].1 as usize, &verts, ch, p, Bounds::Passed, chunk);
-            }
-            let mut seg = std::mem::take(&mut chunk.seg);
-            seg.clear();
-            this.seg_piece(c, n, &mut seg);
-            for &(la, lb) in &seg {
-                this.segment_hit(la, lb, ch, p, chunk);
-            }
-            (chunk.vt, chunk.verts, chunk.seg) = (vt, verts, seg);
+            search_contacts_piece(level, this, c, n, ch, p, reach, &mut guard);
         });
         self.found = self
             .chunks
@@ -158,6 +132,7 @@ impl Strips {
 
     /// Piece `c` of a sub-step's vertex–triangle contacts: the triangles holding its share of
     /// the candidates.
+    #[inline(always)]
     fn tri_contacts(&self, c: usize, chains: &Chains, p: &GuideParams, out: &mut Chunk) {
         let total = self.tri_verts.len() as u32;
         let first = |c: usize| {
@@ -179,6 +154,7 @@ impl Strips {
     /// or prism already puts it past the contact distance; [`Bounds::Passed`] skips that for
     /// candidates the search has just kept within it (the same contacts either way: the bounds
     /// only turn down vertices the exact distance turns down too).
+    #[inline(always)]
     pub(super) fn triangle_hits(
         &self,
         t: usize,
@@ -266,6 +242,7 @@ impl Strips {
     }
 
     /// Piece `c` of a sub-step's segment–segment contacts: its share of the candidates.
+    #[inline(always)]
     fn seg_contacts(&self, c: usize, chains: &Chains, p: &GuideParams, out: &mut Chunk) {
         let len = self.seg_pairs.len();
         for &(la, lb) in &self.seg_pairs[c * len / CHUNKS..(c + 1) * len / CHUNKS] {
@@ -274,6 +251,7 @@ impl Strips {
     }
 
     /// The contact of links `la` and `lb`, if they are in contact.
+    #[inline(always)]
     pub(super) fn segment_hit(
         &self,
         la: u32,
@@ -340,6 +318,66 @@ impl Strips {
             f,
             cd,
         });
+    }
+}
+
+multiversion! {
+    /// Piece `c` of [`Strips::apply_on`], built for AVX2 too (see `crate::simd::dispatch`):
+    /// the same forces bit for bit, the scalar `f64` arithmetic in three-operand encoding and
+    /// the bounds eight lanes wide.
+    fn contacts_piece(
+        this: &Strips,
+        c: usize,
+        ch: &Chains,
+        p: &GuideParams,
+        chunk: &mut Chunk,
+    ) {
+        chunk.tri_hits.clear();
+        chunk.seg_hits.clear();
+        chunk.count = 0;
+        this.tri_contacts(c, ch, p, chunk);
+        this.seg_contacts(c, ch, p, chunk);
+    }
+}
+
+multiversion! {
+    /// Piece `c` of [`Strips::detect_apply_on`], built for AVX2 too (see
+    /// `crate::simd::dispatch`): the search's box, crossing and prism tests eight at a time in
+    /// `f32` in one register instead of two, the same candidates and forces bit for bit.
+    #[allow(clippy::too_many_arguments)]
+    fn search_contacts_piece(
+        this: &Strips,
+        c: usize,
+        n: usize,
+        ch: &Chains,
+        p: &GuideParams,
+        reach: f64,
+        chunk: &mut Chunk,
+    ) {
+        chunk.tri_hits.clear();
+        chunk.seg_hits.clear();
+        chunk.count = 0;
+        // The triangles of the piece in order, each with its vertices in index order (as
+        // the listed candidates are grouped).
+        let mut vt = std::mem::take(&mut chunk.vt);
+        let mut verts = std::mem::take(&mut chunk.verts);
+        vt.clear();
+        this.tri_piece(c, ch, reach, &mut vt);
+        for group in vt.chunk_by(|a, b| a.1 == b.1) {
+            verts.clear();
+            verts.extend(group.iter().map(|&(v, _)| v));
+            verts.sort_unstable();
+            // `tri_piece` kept only vertices within `reach` of the triangle's prism and box,
+            // at these very positions: the bounds would turn none of them down.
+            this.triangle_hits(group[0].1 as usize, &verts, ch, p, Bounds::Passed, chunk);
+        }
+        let mut seg = std::mem::take(&mut chunk.seg);
+        seg.clear();
+        this.seg_piece(c, n, &mut seg);
+        for &(la, lb) in &seg {
+            this.segment_hit(la, lb, ch, p, chunk);
+        }
+        (chunk.vt, chunk.verts, chunk.seg) = (vt, verts, seg);
     }
 }
 

@@ -19,7 +19,8 @@
 //! that the threads of a [`Pool`] take in any order; each piece writes only its own lists, and
 //! the lists are joined (candidates) or their forces added (contacts) piece by piece in order
 //! afterwards, so the result is the same bit for bit on one thread or two, whichever thread
-//! took which piece.
+//! took which piece. Each piece is built for AVX2 too (`crate::simd::dispatch`), the same
+//! bits; `vertex_grid.rs` says what that gave.
 //!
 //! Files: `mod.rs` (the strips, their triangles and buffers, tangents, closest points),
 //! `broad.rs` (the broad phase: the segments' grid and boxes, the triangle's prism test),
@@ -31,6 +32,7 @@ use std::sync::Mutex;
 use nalgebra::Vector3;
 
 use crate::par::{for_each_on, Pool};
+use crate::simd::Level;
 
 use super::chain::Chains;
 use super::params::{GuideParams, StripLayout};
@@ -182,9 +184,22 @@ pub struct Strips {
     grid: VertexGrid,
     /// The pieces' findings.
     chunks: Vec<Mutex<Chunk>>,
+    /// The instruction set the pieces run on: `None` for the process's
+    /// ([`crate::simd::level`]); tests pin one to compare the AVX2 build with the portable one.
+    simd_level: Option<Level>,
 }
 
 impl Strips {
+    /// The instruction set the pieces of work run on (see `simd_level`).
+    fn level(&self) -> Level {
+        self.simd_level.unwrap_or_else(crate::simd::level)
+    }
+
+    /// Runs the pieces on the build of `level` (`None`: the process's); the same result.
+    pub fn set_simd_level(&mut self, level: Option<Level>) {
+        self.simd_level = level;
+    }
+
     /// Contacts of the last sub-step touching chain vertex `v`, and touching any vertex in
     /// `guide` (a guide's vertices): a vertex–triangle contact touches its vertex and the
     /// triangle's corners, a segment pair both ends of both segments. For the inspector.

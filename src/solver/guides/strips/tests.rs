@@ -268,3 +268,56 @@ fn searching_while_evaluating_gives_the_same_forces() {
         }
     }
 }
+
+/// The pieces' AVX2 build (`crate::simd::dispatch`) and their portable build list the same
+/// candidates in the same order and add the same forces, bit for bit, through the listed
+/// broad phase and contacts and through the fused search of one sub-step alike. (Where the
+/// processor has no AVX2 both runs take the portable build; CI's machines have it.)
+#[test]
+fn the_avx2_build_of_the_pieces_matches_the_portable_one_bit_for_bit() {
+    let p = GuideParams {
+        contact_distance: 0.008,
+        ..GuideParams::default()
+    };
+    let alive: Vec<usize> = (0..24).collect();
+    let run = |seed: u64, level: Level, fused: bool| {
+        let (c, mut s) = tangle(seed, 24, 10);
+        s.simd_level = Some(level);
+        let mut forces = c.clone();
+        let contacts = if fused {
+            s.detect_apply_on(None, &mut forces, &alive, &p)
+        } else {
+            s.detect_on(None, &c, &alive, 2.0 * p.contact_distance);
+            s.apply_on(None, &mut forces, &p)
+        };
+        let bits: Vec<u64> = forces
+            .f
+            .iter()
+            .flat_map(|v| v.iter().map(|x| x.to_bits()))
+            .chain(forces.damp.iter().map(|x| x.to_bits()))
+            .collect();
+        (contacts, s.candidates(), s.seg_pairs.clone(), bits)
+    };
+    let best = crate::simd::best_available();
+    for seed in 1..6 {
+        for fused in [false, true] {
+            let portable = run(seed, Level::Portable, fused);
+            assert!(portable.0 > 10, "seed {seed}: {} contacts", portable.0);
+            let vector = run(seed, best, fused);
+            assert_eq!(portable.0, vector.0, "seed {seed}, fused {fused}: contacts");
+            assert_eq!(
+                portable.1, vector.1,
+                "seed {seed}, fused {fused}: candidates"
+            );
+            assert_eq!(
+                portable.2, vector.2,
+                "seed {seed}, fused {fused}: segment pairs"
+            );
+            assert!(
+                portable.3 == vector.3,
+                "seed {seed}, fused {fused}: forces differ between {} and portable",
+                best.name()
+            );
+        }
+    }
+}

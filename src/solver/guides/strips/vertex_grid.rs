@@ -6,18 +6,23 @@
 //! meant sorting some 60,000 entries per step on Short; listing the vertices means sorting
 //! 3,000 by counting, and a triangle's cells along z are one run of the sorted vertices.
 //!
-//! Where the time goes, and two things tried that did not help (2026-12-06, `wisptree bench
-//! --live --rows guides`, each variant alternated with the build it started from, the results
-//! the same bit for bit). A triangle visits 3–4 columns of cells and tests 110–160 vertices
+//! Where the time goes, what helped a little and what did not (2026-12-06, each variant
+//! alternated with the build it started from, the results the same bit for bit). This
+//! search, the contacts and the articulated-body runs are built a second time for AVX2
+//! (`crate::simd::dispatch::multiversion`: the eight-lane `f32` tests in one register instead
+//! of two, the `f64` arithmetic in three-operand form, no fused multiply-add, so the same
+//! bits): the guides' step alone on one core (`wisptree bench --solvers guides --seconds 2`,
+//! under `lean`, three runs alternated) 3–6 % faster, Short 1081 → 1048, Short curly 1267 →
+//! 1227, Long 1189 → 1119, Long curly 1503 → 1413 ms per simulated second (medians); within
+//! the noise of `--live`. A triangle visits 3–4 columns of cells and tests 110–160 vertices
 //! in 15–21 groups of eight to keep about 5 (3–5 %; Short under `lean`, Long curly under
 //! `shake`, about 7,000 triangles a step): a strip's triangle is wide, tilted and thin, so
 //! its box holds far more vertices than the slab within `reach` of it. Cells half as large
 //! (vertex cells a fraction of the segments') halved the vertices tested and cut the groups
 //! by 20–40 %, yet the 20 guide rows' real-time factors moved by a median of 1.02 (0.89–1.14,
-//! two runs each): the per-triangle set-up (its prism, box and direction) and the extra
-//! column look-ups take what the groups gave back. Building the search, the contacts and
-//! the articulated-body runs a second time for AVX2 (`crate::simd::dispatch::multiversion`)
-//! gave a median of 1.02 (0.91–1.16, three runs each). Neither landed.
+//! two runs each) and the step alone on one core by less than 2 % on every style: the
+//! per-triangle set-up (its prism, box and direction) and the extra column look-ups take what
+//! the groups gave back. It did not land.
 
 use super::broad::{f32_down, f32_up, tail_mask, Prism};
 use super::*;
@@ -158,6 +163,7 @@ impl Strips {
     /// Piece `c` of the vertex–triangle pairs: its share of the triangles. A triangle (intact)
     /// keeps the vertices of neither of its guides that lie in its box grown by `reach`, cross
     /// it by at least [`MIN_CROSSING`] and lie within `reach` of its prism.
+    #[inline(always)]
     pub(super) fn tri_piece(
         &self,
         c: usize,
