@@ -79,8 +79,8 @@ pub(super) struct RunBuffers {
 }
 
 /// Advances every guide of `alive` over the sub-step `s` under the forces in `chains`, on
-/// the threads of `pool`. Returns the vertices pushed out of the body and the split
-/// integration steps taken.
+/// the threads of `pool` and the build of `level` ([`advance_run`]; the same result on any).
+/// Returns the vertices pushed out of the body and the split integration steps taken.
 pub(super) fn advance_guides(
     level: Level,
     chains: &mut Chains,
