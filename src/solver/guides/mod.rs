@@ -113,9 +113,6 @@ pub struct GuideSolver {
     /// The threads of the strips' broad phase and contacts (none: the calling thread only).
     /// The result does not depend on it.
     pool: Option<crate::par::Pool>,
-    /// The instruction set of the strips' pieces and the guides' runs (`None`: the process's,
-    /// [`crate::simd::level`]). The result does not depend on it; tests pin it.
-    simd_level: Option<crate::simd::Level>,
 }
 
 /// The head's spatial velocity `(ω; v_O)` at the world origin.
@@ -197,7 +194,6 @@ impl GuideSolver {
             mid: Vec::new(),
             pair_d0: Vec::new(),
             strips: Strips::default(),
-            simd_level: None,
             links: Links::default(),
             dense: Dense::new(&model, gp.blend),
             dense_stale: true,
@@ -298,7 +294,6 @@ impl GuideSolver {
     /// portable one; the result is the same bit for bit.
     #[doc(hidden)]
     pub fn set_simd_level(&mut self, level: Option<crate::simd::Level>) {
-        self.simd_level = level;
         self.strips.set_simd_level(level);
     }
 
@@ -519,7 +514,7 @@ impl GuideSolver {
             friction: self.gp.body_friction,
         };
         let (pushed, splits) = advance::advance_guides(
-            self.simd_level.unwrap_or_else(crate::simd::level),
+            self.strips.level(),
             &mut self.chains,
             &self.alive,
             self.pool.as_ref(),

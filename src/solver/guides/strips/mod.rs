@@ -184,14 +184,15 @@ pub struct Strips {
     grid: VertexGrid,
     /// The pieces' findings.
     chunks: Vec<Mutex<Chunk>>,
-    /// The instruction set the pieces run on: `None` for the process's
-    /// ([`crate::simd::level`]); tests pin one to compare the AVX2 build with the portable one.
+    /// The instruction set the pieces run on, and the guides' runs too (the solver's one
+    /// setting): `None` for the process's ([`crate::simd::level`]); tests pin one to compare
+    /// the AVX2 build with the portable one.
     simd_level: Option<Level>,
 }
 
 impl Strips {
     /// The instruction set the pieces of work run on (see `simd_level`).
-    fn level(&self) -> Level {
+    pub(crate) fn level(&self) -> Level {
         self.simd_level.unwrap_or_else(crate::simd::level)
     }
 
