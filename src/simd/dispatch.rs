@@ -5,7 +5,7 @@
 //! (the caller passes [`crate::simd::level`], or a test's explicit level). Plain scalar and
 //! `[f32; 4]` code built for AVX2 uses the three-operand VEX encoding and wider vectors (the
 //! renderer's tile pass runs about 15 % faster, the guide strands' strips and articulated-body
-//! runs 3–6 %); fused multiply-add is never enabled, so both builds compute every value bit
+//! runs 1–5 %); fused multiply-add is never enabled, so both builds compute every value bit
 //! for bit alike. What the body calls is compiled for AVX2 only where it is inlined, so hot
 //! callees must be `#[inline(always)]`.
 //!

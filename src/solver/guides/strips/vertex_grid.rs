@@ -12,9 +12,9 @@
 //! (`crate::simd::dispatch::multiversion`: the eight-lane `f32` tests in one register instead
 //! of two, the `f64` arithmetic in three-operand form, no fused multiply-add, so the same
 //! bits): the guides' step alone on one core (`wisptree bench --solvers guides --seconds 2`,
-//! under `lean`, three runs alternated) 3–6 % faster, Short 1081 → 1048, Short curly 1267 →
-//! 1227, Long 1189 → 1119, Long curly 1503 → 1413 ms per simulated second (medians); within
-//! the noise of `--live`. A triangle visits 3–4 columns of cells and tests 110–160 vertices
+//! under `lean`, with and without run in pairs six times) 1–5 % faster, the median after ÷
+//! before 0.99 on Short, 0.95 Short curly, 0.98 Long, 0.97 Long curly; within the noise of
+//! `--live`. A triangle visits 3–4 columns of cells and tests 110–160 vertices
 //! in 15–21 groups of eight to keep about 5 (3–5 %; Short under `lean`, Long curly under
 //! `shake`, about 7,000 triangles a step): a strip's triangle is wide, tilted and thin, so
 //! its box holds far more vertices than the slab within `reach` of it. Cells half as large
