@@ -34,6 +34,8 @@
 //! 0.83–0.93 → 1.00–1.06.
 
 use crossbeam_channel::{Receiver, Sender};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
 use std::thread::JoinHandle;
 
 use crate::frame::{BodyBuf, EncodedImage, Frame, StrandBuf};
@@ -55,6 +57,35 @@ pub fn scene_camera(scene: &Scene) -> Camera {
     Camera::from_params(&scene.loaded.style.render, lo, hi, DEFAULT_VIEW)
 }
 
+/// Live: whether the drawing thread will take the next frame's strands. The simulation
+/// places every strand of the model for a frame (12,797 on Long: a fifth of the simulation
+/// thread's time with rendering on, 2026-12-06) only when it [`Self::claim`]s the gate; the
+/// drawing thread [`Self::open`]s it again when it has handed its image back. Without it, a
+/// live run placed every strand of every frame and the drawing thread took one frame in
+/// several: the rest was thrown away.
+#[derive(Clone, Debug)]
+pub struct DrawGate(Arc<AtomicBool>);
+
+impl Default for DrawGate {
+    fn default() -> Self {
+        DrawGate(Arc::new(AtomicBool::new(true)))
+    }
+}
+
+impl DrawGate {
+    /// Whether to place this frame's strands for the drawing thread: true once per image
+    /// (the gate closes until [`Self::open`]).
+    pub fn claim(&self) -> bool {
+        self.0.swap(false, Ordering::AcqRel)
+    }
+
+    /// The drawing thread is free for a frame's strands again (or a claimed frame was never
+    /// sent).
+    pub fn open(&self) {
+        self.0.store(true, Ordering::Release);
+    }
+}
+
 /// How much lower than the simulation the render threads run (nice value, 0–19).
 #[cfg_attr(not(target_os = "linux"), allow(dead_code))]
 const RENDER_NICENESS: i32 = 10;
@@ -74,6 +105,9 @@ pub struct RenderSetup {
     /// Live: frames never wait for the renderer, which draws what it has time for (see the
     /// module doc); else every frame is rendered.
     pub live: bool,
+    /// Live: opened when the drawing thread is free (the simulation places the strands of a
+    /// frame only then). Unused when recording.
+    pub gate: DrawGate,
 }
 
 /// Starts the render thread at a lower priority than the caller's (live: the drawing thread,
@@ -146,6 +180,7 @@ fn start_live(setup: RenderSetup) -> Result<(), String> {
         input,
         output,
         live: _,
+        gate,
     } = setup;
     std::thread::Builder::new()
         .name("wisptree-draw".into())
@@ -175,6 +210,9 @@ fn start_live(setup: RenderSetup) -> Result<(), String> {
                 if drawn_tx.send(Drawn { image, job }).is_err() {
                     break;
                 }
+                // After the send: the frame that brings the next strands finds this image
+                // (and the job's buffers) waiting for it.
+                gate.open();
             }
         })
         .map_err(|e| format!("starting the drawing thread: {e}"))?;
@@ -190,7 +228,8 @@ fn start_live(setup: RenderSetup) -> Result<(), String> {
 
 /// The live render thread: passes every frame from `input` on to `output` at once. The
 /// drawing thread (`jobs` in, `drawn` out) gets the strands of a frame that arrives while it is
-/// idle; a frame that arrives while it draws is skipped. A finished image goes on with the next
+/// idle; a frame that arrives while it draws, or without strands (the simulation places them
+/// only when the [`DrawGate`] is open), is skipped. A finished image goes on with the next
 /// frame. Returns when `input` hangs up or `output` goes away, without waiting for an image
 /// being drawn.
 fn dispatch(
@@ -212,7 +251,10 @@ fn dispatch(
             frame.image = Some(image);
             spare = Some(job);
         }
-        if !frame.render_strands.is_empty() {
+        if frame.render_strands.is_empty() {
+            // The simulation did not place the strands: the drawing thread was busy.
+            skipped += 1;
+        } else {
             match spare.take() {
                 Some(mut job) => {
                     // The frame goes on with the job's old strands, which nothing after the
@@ -415,6 +457,71 @@ mod tests {
         render.join().expect("the render thread returns");
         assert!(logger.recv().is_err(), "the logger's input closes");
         drop(jobs_rx);
+    }
+
+    /// Live with a real drawing thread: the gate lets the simulation place one frame's
+    /// strands, stays closed while that frame is drawn, and opens once its image is back; a
+    /// frame sent without strands passes on and counts as skipped.
+    #[test]
+    fn live_the_gate_lets_one_frame_in_per_image_and_frames_without_strands_are_skipped() {
+        let gate = DrawGate::default();
+        let (sim_tx, input) = bounded::<Frame>(1);
+        let (output, logger) = unbounded::<Frame>();
+        let params = crate::style::RenderParams::default();
+        let camera = Camera::from_params(&params, [-1.0; 3], [1.0; 3], DEFAULT_VIEW);
+        start(RenderSetup {
+            params,
+            size: (32, 24),
+            camera,
+            input,
+            output,
+            live: true,
+            gate: gate.clone(),
+        })
+        .expect("the drawing thread starts");
+        let skipped = |f: &Frame| {
+            f.stats
+                .iter()
+                .find(|s| s.name == RENDER_SKIPPED)
+                .unwrap()
+                .value
+        };
+        assert!(
+            gate.claim(),
+            "open at the start: the drawing thread is idle"
+        );
+        assert!(
+            !gate.claim(),
+            "closed once claimed, until the image is back"
+        );
+        sim_tx.send(frame(0)).unwrap();
+        let f = logger.recv().unwrap();
+        assert_eq!((f.index, skipped(&f)), (0, 0.0));
+        let t0 = std::time::Instant::now();
+        while !gate.claim() {
+            assert!(
+                t0.elapsed() < std::time::Duration::from_secs(60),
+                "the drawing thread never opened the gate again"
+            );
+            std::thread::sleep(std::time::Duration::from_millis(1));
+        }
+        // The gate was claimed for frame 1: it carries strands, and frame 0's image.
+        sim_tx.send(frame(1)).unwrap();
+        let f = logger.recv().unwrap();
+        let img = f.image.as_ref().expect("frame 0's image rides on frame 1");
+        assert_eq!((img.shows, img.width, img.height), (Some((0, 0.0)), 32, 24));
+        assert_eq!(skipped(&f), 0.0);
+        // Frame 2 comes without strands (the gate was closed): passed on, skipped.
+        sim_tx
+            .send(Frame {
+                index: 2,
+                ..Frame::default()
+            })
+            .unwrap();
+        let f = logger.recv().unwrap();
+        assert_eq!((f.index, skipped(&f)), (2, 1.0));
+        drop(sim_tx);
+        assert!(logger.iter().count() == 0, "the logger's input closes");
     }
 
     #[cfg(target_os = "linux")]

@@ -8,6 +8,7 @@ use crossbeam_channel::{Receiver, Sender, TrySendError};
 
 use super::console::Console;
 use super::keys::{self, KeyAction};
+use super::render_thread::DrawGate;
 use super::stop::StopSignal;
 use crate::frame::Frame;
 use crate::pipeline::{self, FrameBuilder};
@@ -123,6 +124,9 @@ pub struct SimThread {
     pub tunes: Option<Receiver<SetTunable>>,
     /// The node whose numbers each frame carries (`run --inspect`).
     pub inspect: Option<crate::solver::NodeId>,
+    /// With rendering that skips frames: open when the drawing thread will take a frame's
+    /// strands (they are placed only then). `None`: every frame is rendered.
+    pub draw_gate: Option<DrawGate>,
 }
 
 /// The state of the loop that a control message may change.
@@ -141,6 +145,8 @@ struct LoopState {
     said_slow: bool,
     /// The inspected node (`run --inspect`).
     inspect: Option<crate::solver::NodeId>,
+    /// See [`SimThread::draw_gate`].
+    draw_gate: Option<DrawGate>,
 }
 
 impl SimThread {
@@ -159,6 +165,7 @@ impl SimThread {
             meter: RealtimeMeter::new(),
             said_slow: false,
             inspect: self.inspect,
+            draw_gate: self.draw_gate.clone(),
         };
         say_ignored(&*st.solver, console, &mut st.messages);
         let mut report = st.solver.new_report();
@@ -209,6 +216,10 @@ impl SimThread {
                         // The whole frame goes; its messages ride on the next one.
                         st.out.dropped += 1;
                         f.events.clear();
+                        if let (Some(gate), false) = (&st.draw_gate, f.render_strands.is_empty()) {
+                            // Its strands never reach the drawing thread: the next frame's may.
+                            gate.open();
+                        }
                         carry = Some(f);
                     }
                     Err(TrySendError::Disconnected(_)) => break,
@@ -440,11 +451,13 @@ fn make_frame(
     index: u64,
 ) {
     f.step_ms = pipeline::step_frame(&mut *st.solver, report, f);
-    // Without rendering, only the drawn strands are read: the solver may place just those.
-    let read = st.render_builder.is_none().then(|| st.builder.strands());
+    // Every strand for the renderer only when it will draw this frame (see `DrawGate`).
+    let render = st.render_builder.is_some() && st.draw_gate.as_ref().is_none_or(DrawGate::claim);
+    // Otherwise only the drawn strands are read: the solver may place just those.
+    let read = (!render).then(|| st.builder.strands());
     st.solver.display_strands(read);
     st.builder.fill(&mut *st.solver, f);
-    match st.render_builder.as_mut() {
+    match st.render_builder.as_mut().filter(|_| render) {
         Some(b) => b.fill_strands(&*st.solver, &mut f.render_strands),
         None => f.render_strands.clear(),
     }

@@ -202,6 +202,10 @@ fn start_workers(
     console: &Console,
 ) -> anyhow::Result<Workers> {
     let (frame_tx, sim_rx) = crossbeam_channel::bounded::<Frame>(QUEUE_FRAMES);
+    // Rendering that skips frames: the simulation places the strands only for frames the
+    // drawing thread will take.
+    let draw_gate = (opts.render.is_some() && opts.render_skips_when_behind)
+        .then(super::render_thread::DrawGate::default);
     // With rendering, frames go simulation → renderer → logger; without, straight through.
     let frame_rx = match opts.render {
         Some(size) => {
@@ -213,6 +217,7 @@ fn start_workers(
                 input: sim_rx,
                 output: tx,
                 live: opts.render_skips_when_behind,
+                gate: draw_gate.clone().unwrap_or_default(),
             };
             super::render_thread::start(setup)
                 .map_err(|e| crate::error::BadInput(format!("rendering: {e}")))?;
@@ -275,6 +280,7 @@ fn start_workers(
         shared: opts.web.as_ref().map(|w| Arc::clone(&w.shared)),
         tunes: opts.web.as_ref().map(|w| w.tunes.clone()),
         inspect: opts.inspect,
+        draw_gate,
     };
     let sim = {
         let stop = stop.clone();

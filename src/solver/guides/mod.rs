@@ -94,8 +94,12 @@ pub struct GuideSolver {
     dense: Dense,
     /// The alive guides changed since `dense` was bound to them.
     dense_stale: bool,
-    /// The only strands the display reads (`Solver::display_strands`; `None`: all).
-    shown: Option<Vec<u32>>,
+    /// The only strands the display reads (`Solver::display_strands`), unless `show_all`.
+    /// Kept when `show_all` switches on and off (a live run with rendering switches every
+    /// frame or two), so that switching allocates nothing.
+    shown: Vec<u32>,
+    /// Every strand is read (rendering).
+    show_all: bool,
     alive: Vec<usize>,
     time: f64,
     pose: Pose,
@@ -204,7 +208,8 @@ impl GuideSolver {
             spheres: Vec::new(),
             shape_pose: Pose::identity(),
             run_buffers: Vec::new(),
-            shown: None,
+            shown: Vec::new(),
+            show_all: true,
             disp: vec![Vector3::zeros(); cap * (n + 1)],
             last_contacts: 0,
             last_body: 0,

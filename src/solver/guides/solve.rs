@@ -144,7 +144,7 @@ impl Solver for GuideSolver {
         let iso = self.pose.iso;
         self.dense.update(
             self.pool.as_ref(),
-            self.shown.as_deref(),
+            (!self.show_all).then_some(&self.shown[..]),
             &self.model,
             &rot,
             |r| iso.transform_point(&Point3::from(*r)).coords,
@@ -163,10 +163,12 @@ impl Solver for GuideSolver {
     }
 
     fn display_strands(&mut self, strands: Option<&[u32]>) {
-        match strands {
-            None => self.shown = None,
-            Some(list) if self.shown.as_deref() != Some(list) => self.shown = Some(list.to_vec()),
-            Some(_) => {}
+        self.show_all = strands.is_none();
+        if let Some(list) = strands {
+            if self.shown != list {
+                self.shown.clear();
+                self.shown.extend_from_slice(list);
+            }
         }
     }
 
