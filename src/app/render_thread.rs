@@ -103,18 +103,16 @@ pub struct RenderSetup {
     /// Frames on to the logger.
     pub output: Sender<Frame>,
     /// Live: frames never wait for the renderer, which draws what it has time for (see the
-    /// module doc); else every frame is rendered.
-    pub live: bool,
-    /// Live: opened when the drawing thread is free (the simulation places the strands of a
-    /// frame only then). Unused when recording.
-    pub gate: DrawGate,
+    /// module doc), and the drawing thread opens this gate whenever it is free (the
+    /// simulation places a frame's strands only then). `None`: every frame is rendered.
+    pub live: Option<DrawGate>,
 }
 
 /// Starts the render thread at a lower priority than the caller's (live: the drawing thread,
 /// see the module doc); returns once its renderer is built, or why it could not be.
-pub fn start(setup: RenderSetup) -> Result<(), String> {
-    if setup.live {
-        return start_live(setup);
+pub fn start(mut setup: RenderSetup) -> Result<(), String> {
+    if let Some(gate) = setup.live.take() {
+        return start_live(setup, gate);
     }
     let (ready_tx, ready_rx) = crossbeam_channel::bounded::<Result<(), String>>(1);
     std::thread::Builder::new()
@@ -168,7 +166,7 @@ struct Drawn {
 
 /// Live: starts the drawing thread (idle class, with the renderer and its pool) and the render
 /// thread that runs [`dispatch`] at the caller's priority.
-fn start_live(setup: RenderSetup) -> Result<(), String> {
+fn start_live(setup: RenderSetup, gate: DrawGate) -> Result<(), String> {
     let (ready_tx, ready_rx) = crossbeam_channel::bounded::<Result<(), String>>(1);
     // One job at a time: the render thread gives a job only to an idle drawing thread.
     let (jobs_tx, jobs_rx) = crossbeam_channel::bounded::<DrawJob>(1);
@@ -180,7 +178,6 @@ fn start_live(setup: RenderSetup) -> Result<(), String> {
         input,
         output,
         live: _,
-        gate,
     } = setup;
     std::thread::Builder::new()
         .name("wisptree-draw".into())
@@ -475,8 +472,7 @@ mod tests {
             camera,
             input,
             output,
-            live: true,
-            gate: gate.clone(),
+            live: Some(gate.clone()),
         })
         .expect("the drawing thread starts");
         let skipped = |f: &Frame| {

@@ -216,8 +216,7 @@ fn start_workers(
                 camera: super::render_thread::scene_camera(scene),
                 input: sim_rx,
                 output: tx,
-                live: opts.render_skips_when_behind,
-                gate: draw_gate.clone().unwrap_or_default(),
+                live: draw_gate.clone(),
             };
             super::render_thread::start(setup)
                 .map_err(|e| crate::error::BadInput(format!("rendering: {e}")))?;
