@@ -52,6 +52,7 @@ impl Strips {
         let links = chains.len.len();
         self.seg_box
             .resize(links, (Vector3::zeros(), Vector3::zeros()));
+        self.seg_box32.resize(links, [0.0; 6]);
         self.seg_dir.resize(links, Vector3::zeros());
         self.seg_cell.resize(links, [0; 3]);
         let half = Vector3::repeat(reach * 0.5);
@@ -73,6 +74,7 @@ impl Strips {
         // buffers: one thread each.
         let segs = Mutex::new((
             &mut self.seg_box,
+            &mut self.seg_box32,
             &mut self.seg_cell,
             &mut self.seg_dir,
             &mut self.entries,
@@ -86,7 +88,7 @@ impl Strips {
                 guard.build(chains, alive, tangents, h);
             } else {
                 let mut guard = segs.lock().unwrap_or_else(|e| e.into_inner());
-                let (seg_box, seg_cell, seg_dir, entries, sbox) = &mut *guard;
+                let (seg_box, seg_box32, seg_cell, seg_dir, entries, sbox) = &mut *guard;
                 for &g in alive {
                     for i in 0..n {
                         let l = g * n + i;
@@ -94,6 +96,14 @@ impl Strips {
                         let (p, q) = (chains.x[v], chains.x[v + 1]);
                         let (lo, hi) = (p.inf(&q) - half, p.sup(&q) + half);
                         seg_box[l] = (lo, hi);
+                        seg_box32[l] = [
+                            f32_down(lo.x),
+                            f32_down(lo.y),
+                            f32_down(lo.z),
+                            f32_up(hi.x),
+                            f32_up(hi.y),
+                            f32_up(hi.z),
+                        ];
                         seg_cell[l] = cell_of(&lo, h);
                         let t = q - p;
                         seg_dir[l] = t / t.norm();
@@ -101,7 +111,7 @@ impl Strips {
                     }
                 }
                 entries.sort_unstable();
-                fill_boxes(sbox, entries, seg_box);
+                fill_boxes(sbox, entries, seg_box32);
             }
         });
         if self.chunks.len() != CHUNKS {
@@ -252,13 +262,11 @@ multiversion! {
     }
 }
 
-/// The boxes of `entries` (element ids into `boxes`) side by side in `f32`, rounded outwards
-/// (low x, y, z, high x, y, z), followed by eight empty boxes so that eight can always be read.
-fn fill_boxes(
-    out: &mut [Vec<f32>; 6],
-    entries: &[(u64, u32)],
-    boxes: &[(Vector3<f64>, Vector3<f64>)],
-) {
+/// The boxes of `entries` (element ids into `boxes`, each already in `f32` rounded outwards:
+/// low x, y, z, high x, y, z) side by side, followed by eight empty boxes so that eight can
+/// always be read. Rounding once per segment rather than once per entry (a segment has two or
+/// three entries) halved this copy, which ran on one thread beside the vertices' grid.
+fn fill_boxes(out: &mut [Vec<f32>; 6], entries: &[(u64, u32)], boxes: &[[f32; 6]]) {
     let len = entries.len();
     for b in out.iter_mut() {
         b.clear();
@@ -266,13 +274,9 @@ fn fill_boxes(
     }
     let [lx, ly, lz, hx, hy, hz] = out;
     for (i, &(_, id)) in entries.iter().enumerate() {
-        let (lo, hi) = &boxes[id as usize];
-        lx[i] = f32_down(lo.x);
-        ly[i] = f32_down(lo.y);
-        lz[i] = f32_down(lo.z);
-        hx[i] = f32_up(hi.x);
-        hy[i] = f32_up(hi.y);
-        hz[i] = f32_up(hi.z);
+        let b = &boxes[id as usize];
+        (lx[i], ly[i], lz[i]) = (b[0], b[1], b[2]);
+        (hx[i], hy[i], hz[i]) = (b[3], b[4], b[5]);
     }
     for i in len..len + 8 {
         (lx[i], ly[i], lz[i]) = (f32::INFINITY, f32::INFINITY, f32::INFINITY);

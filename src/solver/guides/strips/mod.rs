@@ -173,6 +173,8 @@ pub struct Strips {
     /// Per link: box grown by half the reach, its low corner's cell, and unit direction
     /// (`detect`).
     seg_box: Vec<(Vector3<f64>, Vector3<f64>)>,
+    /// Per link: that box in `f32` rounded outwards (low x, y, z, high x, y, z).
+    seg_box32: Vec<[f32; 6]>,
     seg_cell: Vec<[i64; 3]>,
     seg_dir: Vec<Vector3<f64>>,
     /// Per triangle: the guides of its two sides.
@@ -312,6 +314,7 @@ impl Strips {
             + (self.tri_start.capacity() + self.tri_verts.capacity() + self.cursor.capacity()) * 4
             + self.tangents.capacity() * 24
             + self.seg_box.capacity() * 48
+            + self.seg_box32.capacity() * 24
             + self.seg_cell.capacity() * 24
             + self.seg_dir.capacity() * 24
             + self.tri_guides.capacity() * 8
