@@ -93,6 +93,15 @@ fn the_slow_motion_line_names_the_factor_the_model_the_strands_and_the_threshold
         line.contains("model guides") && !line.contains("--no-render"),
         "{line}"
     );
+    // Both levers of the guide model, with the values in force.
+    let g = guides.tuning().guides;
+    for needle in [
+        format!("up to {} picked", g.count),
+        format!("{} inserted", g.max_inserted),
+        "max_inserted".to_owned(),
+    ] {
+        assert!(line.contains(&needle), "`{needle}` missing from: {line}");
+    }
 }
 
 #[test]

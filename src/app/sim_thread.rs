@@ -526,10 +526,17 @@ pub fn slow_motion_message(solver: &dyn Solver, f: &Frame, rendering: bool) -> S
             "model single-level: all {active} finest nodes active, {strands} strands \
              (the AWT adapts and is faster)"
         ),
-        crate::solver::SolverKind::Guides => format!(
-            "model guides, {active} guide strands for {strands} strands (fewer guides: \
-             `guides:` in the style)"
-        ),
+        crate::solver::SolverKind::Guides => {
+            // Chang §4.3's adaptive guides gather in the fastest hair: the cap is the other
+            // lever (README, "what to do when under 1", has what a lower one bought).
+            let g = solver.tuning().guides;
+            format!(
+                "model guides, {active} guide strands for {strands} strands (up to {} picked \
+                 and {} inserted where neighbours drift apart; fewer: `guides: (count: ..)` \
+                 or `guides: (max_inserted: ..)` in the style)",
+                g.count, g.max_inserted
+            )
+        }
         crate::solver::SolverKind::Layered => {
             format!("model layered, {active} skeleton points for {strands} strands")
         }
