@@ -4,6 +4,32 @@ use super::*;
 use crate::solver::SolverKind;
 use crossbeam_channel::{bounded, unbounded};
 
+/// A simulation thread of `scene` that makes `frames` frames, each with 10 drawn strands and
+/// rendering on, into `tx`, handing `gate` to the simulation; paced and dropping frames when
+/// `live`. No controls arrive and no frame comes back for reuse.
+fn rendering_sim(
+    scene: Scene,
+    tx: crossbeam_channel::Sender<Frame>,
+    gate: Option<DrawGate>,
+    frames: u64,
+    live: bool,
+) -> SimThread {
+    SimThread {
+        scene,
+        strands: 10,
+        render: true,
+        frames_total: Some(frames),
+        live,
+        ctl: unbounded().1,
+        tx,
+        free: unbounded().1,
+        shared: None,
+        tunes: None,
+        inspect: None,
+        draw_gate: gate,
+    }
+}
+
 /// Runs `frames` frames of Short under `lean` with rendering, handing `gate` to the
 /// simulation; `before_rest` runs after the first two frames are received. Per frame:
 /// whether it carried every strand for the renderer.
@@ -12,22 +38,7 @@ fn placed(gate: Option<DrawGate>, frames: u64, before_rest: impl Fn()) -> Vec<bo
     let total = scene.model.strands.len();
     // A rendezvous: the simulation makes frame k + 1 only once frame k is taken.
     let (tx, rx) = bounded::<Frame>(0);
-    let (_ctl_tx, ctl) = unbounded();
-    let (_free_tx, free) = unbounded();
-    let sim = SimThread {
-        scene,
-        strands: 10,
-        render: true,
-        frames_total: Some(frames),
-        live: false,
-        ctl,
-        tx,
-        free,
-        shared: None,
-        tunes: None,
-        inspect: None,
-        draw_gate: gate,
-    };
+    let sim = rendering_sim(scene, tx, gate, frames, false);
     let run =
         std::thread::spawn(move || sim.run(&StopSignal::new(), &Console::with_progress(None)));
     let mut out = Vec::new();
@@ -76,24 +87,9 @@ fn a_dropped_frame_gives_back_its_claim_on_the_draw_gate() {
     // A queue of one, already full and never read: every frame of the run is dropped.
     let (tx, _rx) = bounded::<Frame>(1);
     tx.try_send(Frame::default()).expect("room for one frame");
-    let (_ctl_tx, ctl) = unbounded();
-    let (_free_tx, free) = unbounded();
     let gate = DrawGate::default();
     let frames = 3;
-    let sim = SimThread {
-        scene,
-        strands: 10,
-        render: true,
-        frames_total: Some(frames),
-        live: true,
-        ctl,
-        tx,
-        free,
-        shared: None,
-        tunes: None,
-        inspect: None,
-        draw_gate: Some(gate.clone()),
-    };
+    let sim = rendering_sim(scene, tx, Some(gate.clone()), frames, true);
     let out = sim.run(&StopSignal::new(), &Console::with_progress(None));
     assert_eq!(out.frames, frames, "every frame was made");
     assert_eq!(

@@ -96,14 +96,7 @@ impl Strips {
                         let (p, q) = (chains.x[v], chains.x[v + 1]);
                         let (lo, hi) = (p.inf(&q) - half, p.sup(&q) + half);
                         seg_box[l] = (lo, hi);
-                        seg_box32[l] = [
-                            f32_down(lo.x),
-                            f32_down(lo.y),
-                            f32_down(lo.z),
-                            f32_up(hi.x),
-                            f32_up(hi.y),
-                            f32_up(hi.z),
-                        ];
+                        seg_box32[l] = f32_box(&lo, &hi);
                         seg_cell[l] = cell_of(&lo, h);
                         let t = q - p;
                         seg_dir[l] = t / t.norm();
@@ -320,6 +313,20 @@ fn overlap8(a: &[f32; 6], boxes: &[Vec<f32>; 6], i: usize) -> u32 {
         mask |= b << j;
     }
     mask
+}
+
+/// The box `lo..hi` in `f32` rounded outwards (low x, y, z, high x, y, z), as the lanes test it:
+/// it holds every point of the `f64` box.
+#[inline]
+pub(super) fn f32_box(lo: &Vector3<f64>, hi: &Vector3<f64>) -> [f32; 6] {
+    [
+        f32_down(lo.x),
+        f32_down(lo.y),
+        f32_down(lo.z),
+        f32_up(hi.x),
+        f32_up(hi.y),
+        f32_up(hi.z),
+    ]
 }
 
 /// The largest `f32` not above `x`.

@@ -24,7 +24,7 @@
 //! per-triangle set-up (its prism, box and direction) and the extra column look-ups take what
 //! the groups gave back. It did not land.
 
-use super::broad::{f32_down, f32_up, tail_mask, Prism};
+use super::broad::{f32_box, f32_down, f32_up, tail_mask, Prism};
 use super::*;
 
 /// Cells per axis at most. A vertex or a triangle past the grid's edge is clamped into the
@@ -193,14 +193,7 @@ impl Strips {
             }
             let dir = dir.try_normalize(1e-12).unwrap_or_else(Vector3::y);
             let df = [dir.x as f32, dir.y as f32, dir.z as f32];
-            let bounds = [
-                f32_down(lo.x),
-                f32_down(lo.y),
-                f32_down(lo.z),
-                f32_up(hi.x),
-                f32_up(hi.y),
-                f32_up(hi.z),
-            ];
+            let bounds = f32_box(&lo, &hi);
             let [ga, gb] = self.tri_guides[t];
             let prism = Prism::new(&tp);
             // The prism in `f32` decides in lanes the vertices clearly inside or clearly
