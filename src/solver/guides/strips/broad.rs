@@ -257,8 +257,8 @@ multiversion! {
 
 /// The boxes of `entries` (element ids into `boxes`, each already in `f32` rounded outwards:
 /// low x, y, z, high x, y, z) side by side, followed by eight empty boxes so that eight can
-/// always be read. Rounding once per segment rather than once per entry (a segment has two or
-/// three entries) halved this copy, which ran on one thread beside the vertices' grid.
+/// always be read. The boxes are rounded once per segment, not once per entry (a segment has
+/// two or three): this copy runs on one thread beside the vertices' grid.
 fn fill_boxes(out: &mut [Vec<f32>; 6], entries: &[(u64, u32)], boxes: &[[f32; 6]]) {
     let len = entries.len();
     for b in out.iter_mut() {
