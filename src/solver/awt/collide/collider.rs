@@ -7,6 +7,7 @@ use nalgebra::Vector3;
 
 use super::*;
 use crate::par::{split_parts, Pool};
+use crate::simd::boxes::RUN;
 
 /// Chunks of cells the pair search is cut into: enough for two threads to even out, few
 /// enough that each chunk's per-node loads stay cheap to add. (16 was tried on 2026-12-06
@@ -47,10 +48,10 @@ pub(super) struct WorkerOut {
 /// ranges starts: there the two masks have no bit in common. So the "tested once" rule is one AND
 /// on data already in the cell list, without a pair set or a lookup of the ranges.
 ///
-/// Per-segment data is split by temperature: the pair loop reads a [`Reach`] (the box, 32
-/// aligned bytes) for every candidate, the [`SegBox`]'s node slots only when the boxes overlap,
-/// and [`SegPre`] (positions, velocities, f64) only for the pairs that pass the box and
-/// adjacency tests.
+/// Per-segment data is split by temperature: the pair loop reads the cell entries' boxes from
+/// arrays kept in cell-list order beside `items` (eight at a time, see [`Broad::search`]), the
+/// [`SegBox`]'s node slots only when the boxes overlap, and [`SegPre`] (positions, velocities,
+/// f64) only for the pairs that pass the box and adjacency tests.
 ///
 /// **Two threads, same result.** The cells are cut into [`CHUNKS`] runs of about equal work,
 /// and with [`Self::set_threads`]`(2)` the caller and the pool's helper claim them until none
@@ -110,12 +111,12 @@ impl HairCollider {
         };
         let broad = Broad {
             boxes: Vec::with_capacity(segments),
-            reach: Vec::with_capacity(segments),
             pre: Vec::with_capacity(segments),
             lo: Vec::with_capacity(segments),
             hi: Vec::with_capacity(segments),
             cell_start: Vec::with_capacity(cells),
-            items: Vec::with_capacity(ITEMS_PER_SEGMENT * segments),
+            items: Vec::with_capacity(ITEMS_PER_SEGMENT * segments + RUN),
+            entries: EntryBoxes::with_capacity(ITEMS_PER_SEGMENT * segments + RUN),
             grid: GridInfo::default(),
             inv_mass: Vec::with_capacity(nodes),
             ends: Vec::with_capacity(segments),
@@ -193,7 +194,7 @@ impl HairCollider {
             .map(|o| lock(o).contacts.capacity() * std::mem::size_of::<Contact>())
             .sum();
         b.boxes.capacity() * std::mem::size_of::<SegBox>()
-            + b.reach.capacity() * std::mem::size_of::<Reach>()
+            + b.entries.capacity_bytes()
             + b.pre.capacity() * std::mem::size_of::<SegPre>()
             + (b.lo.capacity() + b.hi.capacity()) * std::mem::size_of::<[u32; 3]>()
             + (b.cell_start.capacity() + b.items.capacity()) * 4
@@ -223,32 +224,7 @@ impl HairCollider {
             "too many segments for the cell lists: {n}"
         );
         let nodes = force.len();
-        {
-            let b = &mut self.broad;
-            b.boxes.clear();
-            b.boxes.extend((0..n).map(|i| SegBox::new(segs, pos, i)));
-            b.reach.clear();
-            b.reach.extend(b.boxes.iter().map(Reach::far));
-            b.pre.clear();
-            b.pre.extend((0..n).map(|i| SegPre::new(segs, pos, vel, i)));
-            b.build();
-            // As `Response::new` computes it: a slot's mass is its mass as a child.
-            b.inv_mass.clear();
-            b.inv_mass.resize(nodes, 0.0);
-            for i in 0..n {
-                b.inv_mass[segs.child[i] as usize] = 1.0 / segs.child_mass[i];
-            }
-            b.ends.clear();
-            b.ends.extend((0..n).map(|i| {
-                let (parent, child) = (segs.parent[i], segs.child[i]);
-                SegEnds {
-                    parent,
-                    child,
-                    inv_parent: b.inv_mass[parent as usize],
-                    inv_child: b.inv_mass[child as usize],
-                }
-            }));
-        }
+        self.broad.prepare(segs, pos, vel, nodes);
         let eps2 = p.epsilon * p.epsilon;
         let broad = &self.broad;
         let mut response = Response::new(segs, nodes, &mut self.inv_mass, &mut self.load);

@@ -4,8 +4,8 @@ use std::ops::Range;
 
 use nalgebra::Vector3;
 
-use crate::simd::boxes::BoxTest;
-use crate::simd::dispatch::{Avx2, Portable};
+use crate::simd::boxes::{BoxTest, Entries, Probe, RUN};
+#[cfg(test)]
 use crate::simd::Level;
 
 use super::*;
@@ -73,8 +73,6 @@ impl GridInfo {
 pub(super) struct Broad {
     /// Per segment: inflated box and node slots (the slots read for overlapping boxes).
     pub(super) boxes: Vec<SegBox>,
-    /// Per segment: [`Reach::far`] of its box, what the candidate loop compares (hot).
-    pub(super) reach: Vec<Reach>,
     /// Per segment: its data for the relative-motion test and the closest points (cold).
     pub(super) pre: Vec<SegPre>,
     /// Per segment: min and max cell coordinates of its box.
@@ -82,8 +80,11 @@ pub(super) struct Broad {
     pub(super) hi: Vec<[u32; 3]>,
     /// Dense cell offsets into `items` (counting sort), `ncells + 1` entries.
     pub(super) cell_start: Vec<u32>,
-    /// Segment index | mask << [`MASK_SHIFT`], grouped by cell, ascending index within a cell.
+    /// Segment index | mask << [`MASK_SHIFT`], grouped by cell, ascending index within a cell,
+    /// then [`RUN`] entries of padding.
     pub(super) items: Vec<u32>,
+    /// The entries' boxes, in the order of `items` (what the candidate loop compares, hot).
+    pub(super) entries: EntryBoxes,
     pub(super) grid: GridInfo,
     /// Per node slot: 1 / its mass as a child, 0 for a kinematic root (as [`Response`] has it),
     /// for the loads the search records.
@@ -107,63 +108,55 @@ impl Broad {
         out: &mut Vec<Contact>,
         loads: &mut [f64],
     ) -> PairStats {
-        match crate::simd::level() {
-            Level::Avx2 => self.search_on::<Avx2>(cells, p, eps2, out, loads),
-            Level::Portable => self.search_on::<Portable>(cells, p, eps2, out, loads),
-        }
+        search_cells(crate::simd::level(), self, cells, p, eps2, out, loads)
     }
 
-    /// [`Self::search`] with the box test on the instruction set `I`.
-    #[inline(always)]
-    fn search_on<I: BoxTest>(
+    /// Fills the per-segment data and the grid for a search of the segments `segs` at `pos`
+    /// and `vel` (`nodes` node slots).
+    pub(super) fn prepare(
+        &mut self,
+        segs: &SegmentsView,
+        pos: &[Vector3<f64>],
+        vel: &[Vector3<f64>],
+        nodes: usize,
+    ) {
+        let n = segs.len();
+        self.boxes.clear();
+        self.boxes.extend((0..n).map(|i| SegBox::new(segs, pos, i)));
+        self.pre.clear();
+        self.pre
+            .extend((0..n).map(|i| SegPre::new(segs, pos, vel, i)));
+        self.build();
+        // As `Response::new` computes it: a slot's mass is its mass as a child.
+        self.inv_mass.clear();
+        self.inv_mass.resize(nodes, 0.0);
+        for i in 0..n {
+            self.inv_mass[segs.child[i] as usize] = 1.0 / segs.child_mass[i];
+        }
+        self.ends.clear();
+        self.ends.extend((0..n).map(|i| {
+            let (parent, child) = (segs.parent[i], segs.child[i]);
+            SegEnds {
+                parent,
+                child,
+                inv_parent: self.inv_mass[parent as usize],
+                inv_child: self.inv_mass[child as usize],
+            }
+        }));
+    }
+
+    /// [`Self::search`] on a given instruction set (tests compare the two).
+    #[cfg(test)]
+    pub(super) fn search_at(
         &self,
+        level: Level,
         cells: Range<usize>,
         p: &ContactParams,
         eps2: f64,
         out: &mut Vec<Contact>,
         loads: &mut [f64],
     ) -> PairStats {
-        let mut stats = PairStats::default();
-        let (boxes, pre, reach) = (&self.boxes[..], &self.pre[..], &self.reach[..]);
-        let items = &self.items[..];
-        let starts = &self.cell_start[..];
-        let before = out.len();
-        let mut batched = Batched::new(p, &self.ends, loads);
-        const INDEX: u32 = (1 << MASK_SHIFT) - 1;
-        for c in cells {
-            let cell = &items[starts[c] as usize..starts[c + 1] as usize];
-            if cell.len() < 2 {
-                continue;
-            }
-            for (k, &ia) in cell.iter().enumerate() {
-                let ma = ia >> MASK_SHIFT;
-                let a = (ia & INDEX) as usize;
-                let ba = &boxes[a];
-                let corner = Reach::corner(ba);
-                for &ib in &cell[k + 1..] {
-                    // Only in the min corner of the overlap of the two cell ranges (see above).
-                    if ma & (ib >> MASK_SHIFT) != 0 {
-                        continue;
-                    }
-                    stats.candidates += 1;
-                    let b = (ib & INDEX) as usize;
-                    // `near`, with the box test on the aligned `Reach` first: most candidates
-                    // stop there without reading the node slots.
-                    if apart::<I>(&corner, &reach[b])
-                        || adjacent(ba, &boxes[b])
-                        || !moving(&pre[a], &pre[b], eps2)
-                    {
-                        continue;
-                    }
-                    stats.tested += 1;
-                    // Cell lists are ascending: `a` has the lower index, as `contact` wants.
-                    batched.push((boxes, pre), a, b, p, out);
-                }
-            }
-        }
-        batched.flush((boxes, pre), p, out);
-        stats.in_contact = (out.len() - before) as u32;
-        stats
+        search_cells(level, self, cells, p, eps2, out, loads)
     }
 
     /// Cuts the cells into [`CHUNKS`] runs of about equal work (chunk `k` is cells
@@ -263,7 +256,8 @@ impl Broad {
         }
         self.cell_start[ncells] = acc;
         self.items.clear();
-        self.items.resize(total, 0);
+        self.items.resize(total + RUN, 0);
+        self.entries.clear_to(total + RUN);
         // Filling from the last segment backwards while decrementing the ends leaves each cell
         // list ascending and cell_start[c] at the start of cell c.
         for i in (0..n).rev() {
@@ -278,9 +272,216 @@ impl Broad {
                         let s = &mut self.cell_start[row + x as usize];
                         *s -= 1;
                         self.items[*s as usize] = i as u32 | mask << MASK_SHIFT;
+                        self.entries.set(*s as usize, &self.boxes[i]);
                     }
                 }
             }
         }
+    }
+}
+
+crate::simd::dispatch::multiversion! {
+    /// [`Broad::search`]'s loop, compiled for AVX2 and for the baseline. For each entry `a` of
+    /// a cell, the entries after it are filtered [`RUN`] at a time ([`BoxTest::run8`]: found
+    /// in this cell, boxes overlapping), and only the survivors, in cell order, go on to
+    /// [`adjacent`], [`moving`] and the batched narrow phase: the same pairs in the same order
+    /// as one pair at a time, so the same contacts and forces bit for bit.
+    fn search_cells<I: BoxTest>(
+        broad: &Broad,
+        cells: Range<usize>,
+        p: &ContactParams,
+        eps2: f64,
+        out: &mut Vec<Contact>,
+        loads: &mut [f64],
+    ) -> PairStats {
+        let mut stats = PairStats::default();
+        let (boxes, pre) = (&broad.boxes[..], &broad.pre[..]);
+        let items = &broad.items[..];
+        let starts = &broad.cell_start[..];
+        let entries = broad.entries.view(items);
+        let before = out.len();
+        let mut batched = Batched::new(p, &broad.ends, loads);
+        const INDEX: u32 = (1 << MASK_SHIFT) - 1;
+        for c in cells {
+            let (first, end) = (starts[c] as usize, starts[c + 1] as usize);
+            if end - first < 2 {
+                continue;
+            }
+            for k in first..end - 1 {
+                let ia = items[k];
+                let a = (ia & INDEX) as usize;
+                let ba = &boxes[a];
+                // Only in the min corner of the overlap of the two cell ranges (see above):
+                // an entry sharing a "starts below" axis bit with `a` meets it in another cell.
+                let probe = Probe {
+                    lo: ba.lo,
+                    hi: ba.hi,
+                    flags: ia & !INDEX,
+                };
+                let mut at = k + 1;
+                while at < end {
+                    let (found, near) = I::run8(&probe, &entries, at);
+                    // Entries past the cell's end belong to the next cells (or the padding).
+                    let valid = if end - at >= RUN { u32::MAX } else { (1 << (end - at)) - 1 };
+                    stats.candidates += (found & valid).count_ones();
+                    let mut bits = near & valid;
+                    while bits != 0 {
+                        let b = (items[at + bits.trailing_zeros() as usize] & INDEX) as usize;
+                        bits &= bits - 1;
+                        if adjacent(ba, &boxes[b]) || !moving(&pre[a], &pre[b], eps2) {
+                            continue;
+                        }
+                        stats.tested += 1;
+                        // Cell lists are ascending: `a` has the lower index, as `contact` wants.
+                        batched.push((boxes, pre), a, b, p, out);
+                    }
+                    at += RUN;
+                }
+            }
+        }
+        batched.flush((boxes, pre), p, out);
+        stats.in_contact = (out.len() - before) as u32;
+        stats
+    }
+}
+
+/// The boxes of the cell-list entries in cell-list order, as [`BoxTest::run8`] reads them,
+/// with [`RUN`] entries of padding.
+#[derive(Default)]
+pub(super) struct EntryBoxes {
+    lo: [Vec<f32>; 3],
+    hi: [Vec<f32>; 3],
+}
+
+impl EntryBoxes {
+    pub(super) fn with_capacity(len: usize) -> Self {
+        EntryBoxes {
+            lo: std::array::from_fn(|_| Vec::with_capacity(len)),
+            hi: std::array::from_fn(|_| Vec::with_capacity(len)),
+        }
+    }
+
+    fn clear_to(&mut self, len: usize) {
+        for v in self.lo.iter_mut().chain(&mut self.hi) {
+            v.clear();
+            v.resize(len, 0.0);
+        }
+    }
+
+    #[inline(always)]
+    fn set(&mut self, at: usize, b: &SegBox) {
+        for k in 0..3 {
+            self.lo[k][at] = b.lo[k];
+            self.hi[k][at] = b.hi[k];
+        }
+    }
+
+    /// The boxes with `words` (the items, padded alike).
+    fn view<'a>(&'a self, words: &'a [u32]) -> Entries<'a> {
+        Entries {
+            lo: [&self.lo[0], &self.lo[1], &self.lo[2]],
+            hi: [&self.hi[0], &self.hi[1], &self.hi[2]],
+            word: words,
+        }
+    }
+
+    pub(super) fn capacity_bytes(&self) -> usize {
+        self.lo
+            .iter()
+            .chain(&self.hi)
+            .map(|v| v.capacity() * 4)
+            .sum()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The whole candidate loop on the portable twin and on the best instruction set finds the
+    /// same pairs and gives the same contacts and loads bit for bit, on a tangle of strands
+    /// dense enough that cells hold dozens of entries (runs of eight with ragged ends) and
+    /// every filter rejects some pairs.
+    #[test]
+    fn the_search_is_the_same_on_both_twins() {
+        let mut seed = 0x9e37_79b9_7f4a_7c15u64;
+        let mut rand = || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+        };
+        let (strands, nodes_per) = (80, 12);
+        let (mut pos, mut vel) = (Vec::new(), Vec::new());
+        let (mut parent, mut child, mut radius, mut mass, mut chain) =
+            (vec![], vec![], vec![], vec![], vec![]);
+        for s in 0..strands {
+            let mut x = Vector3::new(rand() * 0.1, 0.0, rand() * 0.1);
+            let v = Vector3::new(rand(), rand(), rand());
+            for k in 0..nodes_per {
+                if k > 0 {
+                    parent.push((pos.len() - 1) as u32);
+                    child.push(pos.len() as u32);
+                    radius.push(0.003 + 0.005 * (rand() + 0.5));
+                    mass.push(1e-3);
+                    chain.push(s as u32);
+                }
+                pos.push(x);
+                // Some strands move together: those pairs fail the relative-motion test.
+                vel.push(if s % 3 == 0 {
+                    Vector3::zeros()
+                } else {
+                    v * (k as f64)
+                });
+                x += Vector3::new(rand() * 0.02, -0.01, rand() * 0.02);
+            }
+        }
+        let segs = SegmentsView {
+            parent: &parent,
+            child: &child,
+            radius: &radius,
+            child_mass: &mass,
+            chain: &chain,
+        };
+        let mut broad = Broad::default();
+        broad.prepare(&segs, &pos, &vel, pos.len());
+        let p = ContactParams {
+            friction: 40.0,
+            repulsion: 2000.0,
+            cos_angle_threshold: 0.9,
+            epsilon: 0.05,
+            dt: 0.01,
+        };
+        let cells = 0..broad.cell_start.len() - 1;
+        let run = |level: Level| {
+            let (mut out, mut loads) = (Vec::new(), vec![0.0; pos.len()]);
+            let stats = broad.search_at(
+                level,
+                cells.clone(),
+                &p,
+                p.epsilon.powi(2),
+                &mut out,
+                &mut loads,
+            );
+            (
+                stats,
+                format!("{out:?}"),
+                loads.iter().map(|x| x.to_bits()).collect::<Vec<_>>(),
+            )
+        };
+        let portable = run(Level::Portable);
+        let best = run(crate::simd::best_available());
+        assert_eq!(portable.0, best.0);
+        assert!(portable.1 == best.1, "the contacts differ");
+        assert_eq!(portable.2, best.2, "the loads differ");
+        let s = portable.0;
+        assert!(
+            s.tested > 1000 && s.in_contact > 100 && s.tested < s.candidates,
+            "a mix of pairs: {s:?}"
+        );
+        let longest = cells
+            .map(|c| broad.cell_start[c + 1] - broad.cell_start[c])
+            .max();
+        assert!(longest > Some(2 * RUN as u32), "runs of eight: {longest:?}");
     }
 }

@@ -68,13 +68,19 @@
 //!   the noise of one another. The dense array is capped at [`CELLS_PER_SEGMENT`] cells per
 //!   segment (clearing and scanning it cost per cell) and at [`MAX_CELLS`] in all (the cell side
 //!   grows instead), which bounds time and memory when a node flies away.
-//! * **The candidate loop stays scalar**, but for its box test: each segment's box is kept
-//!   beside the [`SegBox`]es as an aligned [`Reach`] (bounds arranged so that "apart on some
-//!   axis" is one lane-by-lane `>` of eight f32, two SSE compares in `crate::simd::boxes`),
-//!   and the node slots are read only when the boxes overlap: 3–4 % off the stage (2026-12-06,
-//!   `examples/interactions.rs long short long_curly --motion shake`, alternated three times:
-//!   long 10.9–11.3 → 10.6–10.7 ms, long_curly at split 0.05 57.5–58.5 → 55.3–56.3 ms at 3 s).
-//!   The rest of this point is older. Testing a voxel's segments eight pairs at a time (box,
+//! * **The candidate loop filters eight entries at a time.** The counting sort that fills the
+//!   cell lists also writes each entry's f32 box into structure-of-arrays bounds in the same
+//!   order (`EntryBoxes` in `grid.rs`), so for each entry `a` of a cell the entries after it
+//!   are tested in runs of eight by `crate::simd::boxes` (AVX2: one integer test of the
+//!   "tested once" masks and six compares of the bounds; a portable twin). Only the survivors,
+//!   in cell order, read their [`SegBox`] (adjacency) and [`SegPre`] (relative motion), so the
+//!   narrow phase sees the same pairs in the same order and the forces are the same bits.
+//!   Under `shake` on `long` (3 s, one thread) a call visits 2.9–3.3 M entry pairs, of which
+//!   1.1–1.3 M pass the mask, 0.6 M the boxes and 0.3 M the relative-motion test.
+//!   2026-12-07: see the dated measurement in README's Performance section. Before that
+//!   (2026-12-06), the box test alone was two SSE compares on an aligned copy of each
+//!   segment's bounds, read through the cell list's index: 3–4 % off the stage.
+//!   The rest of this point is older.//!   The rest of this point is older. Testing a voxel's segments eight pairs at a time (box,
 //!   adjacency and relative-motion tests in AVX2 lanes over a per-voxel copy) was tried and
 //!   measured no faster, under `lean` and under `shake` at split threshold 0.05 alike: the
 //!   mask test rejects most visits for a few instructions, and the cost is in the pairs that

@@ -3,7 +3,6 @@
 use nalgebra::Vector3;
 
 use super::*;
-use crate::simd::boxes::BoxTest;
 use crate::simd::pairs::Segment;
 
 #[inline]
@@ -75,42 +74,6 @@ pub(super) fn adjacent(a: &SegBox, b: &SegBox) -> bool {
         | (a.child == b.parent)
         | (a.child == b.child)
         | (a.chain == b.chain)
-}
-
-/// A [`SegBox`]'s six bounds arranged so that the box test of [`near`] is one lane-by-lane
-/// comparison of eight f32: with `Reach::corner(a) = (lo, −hi, −∞, −∞)` and
-/// `Reach::far(b) = (hi, −lo, +∞, +∞)`, lane `k < 3` says `a.lo > b.hi` and lane `3 + k` says
-/// `−a.hi > −b.lo`, i.e. `b.lo > a.hi` (negation is exact, and NaN compares false either way),
-/// so [`apart`] is exactly the box half of [`near`]. The candidate loop reads one aligned
-/// 32-byte [`Reach`] per candidate, and the node slots ([`adjacent`]) only for the boxes that
-/// overlap ([`crate::simd::boxes`] makes the comparison two SSE compares and a mask).
-#[derive(Clone, Copy, Debug, PartialEq)]
-#[repr(C, align(32))]
-pub(super) struct Reach(pub(super) [f32; 8]);
-
-impl Reach {
-    /// `(lo, −hi, −∞, −∞)`: the side of the box compared.
-    #[inline(always)]
-    pub(super) fn corner(b: &SegBox) -> Self {
-        let (lo, hi) = (b.lo, b.hi);
-        let inf = f32::INFINITY;
-        Reach([lo[0], lo[1], lo[2], -hi[0], -hi[1], -hi[2], -inf, -inf])
-    }
-
-    /// `(hi, −lo, +∞, +∞)`: the side of the box compared against.
-    #[inline(always)]
-    pub(super) fn far(b: &SegBox) -> Self {
-        let (lo, hi) = (b.lo, b.hi);
-        let inf = f32::INFINITY;
-        Reach([hi[0], hi[1], hi[2], -lo[0], -lo[1], -lo[2], inf, inf])
-    }
-}
-
-/// Whether the boxes of `corner` (a [`Reach::corner`]) and `far` (a [`Reach::far`]) are apart
-/// on some axis: the box half of [`near`], on the instruction set `I`.
-#[inline(always)]
-pub(super) fn apart<I: BoxTest>(corner: &Reach, far: &Reach) -> bool {
-    I::any_greater8(&corner.0, &far.0)
 }
 
 /// One segment's data for the relative-motion test and the closest points, gathered once per
@@ -300,12 +263,18 @@ pub use crate::solver::common::closest_segment_params;
 mod tests {
     use super::*;
 
-    /// The candidate loop's split test (`apart` on the [`Reach`]es, then `adjacent`) is `near`,
-    /// on both twins, for boxes apart, touching, overlapping, inside one another, and with
-    /// NaN or infinite bounds.
+    /// The candidate loop's split test (the box half of [`BoxTest::run8`], then `adjacent`)
+    /// is `near`, on both twins, for boxes apart, touching, overlapping, inside one another,
+    /// and with NaN or infinite bounds.
     #[test]
-    fn reach_and_adjacency_are_near_on_both_twins() {
+    fn the_lanes_box_test_and_adjacency_are_near_on_both_twins() {
+        use crate::simd::boxes::{BoxTest, Entries, Probe, RUN};
         use crate::simd::dispatch::{Avx2, Portable};
+        crate::simd::dispatch::multiversion! {
+            fn first<I: BoxTest>(probe: &Probe, e: &Entries) -> u32 {
+                I::run8(probe, e, 0).1 & 1
+            }
+        }
         let vals = [
             -1.0f32,
             0.0,
@@ -351,14 +320,25 @@ mod tests {
             };
             let (a, b) = (bx(), bx());
             let want = near(&a, &b);
-            let (corner, far) = (Reach::corner(&a), Reach::far(&b));
-            let portable = !(apart::<Portable>(&corner, &far) || adjacent(&a, &b));
-            let sse = !(apart::<Avx2>(&corner, &far) || adjacent(&a, &b));
+            let probe = Probe {
+                lo: a.lo,
+                hi: a.hi,
+                flags: 0,
+            };
+            let (lo, hi) = (b.lo.map(|x| [x; RUN]), b.hi.map(|x| [x; RUN]));
+            let e = Entries {
+                lo: [&lo[0], &lo[1], &lo[2]],
+                hi: [&hi[0], &hi[1], &hi[2]],
+                word: &[0; RUN],
+            };
+            let portable = Portable::run8(&probe, &e, 0).1 & 1 == 1 && !adjacent(&a, &b);
+            let best = first(crate::simd::best_available(), &probe, &e) == 1 && !adjacent(&a, &b);
             assert_eq!(portable, want, "{:?} {:?}", a.lo, b.lo);
-            assert_eq!(sse, want, "{:?} {:?}", a.lo, b.lo);
+            assert_eq!(best, want, "{:?} {:?}", a.lo, b.lo);
             near_count += usize::from(want);
             total += 1;
         }
+        let _ = Avx2;
         assert!(
             near_count > total / 20 && near_count < total * 19 / 20,
             "{near_count} of {total}"
