@@ -109,6 +109,55 @@ impl BoxTest for Avx2 {
     }
 }
 
+/// Random boxes for the tests of the filter and of its callers.
+#[cfg(test)]
+pub(crate) mod test_boxes {
+    /// A xorshift generator of boxes: apart, touching, overlapping and inside one another,
+    /// with a NaN or infinite bound one time in forty.
+    pub(crate) struct Boxes(pub(crate) u64);
+
+    impl Boxes {
+        /// A number in `0..n`.
+        pub(crate) fn pick(&mut self, n: usize) -> usize {
+            let s = &mut self.0;
+            *s ^= *s << 13;
+            *s ^= *s >> 7;
+            *s ^= *s << 17;
+            (*s % n as u64) as usize
+        }
+
+        /// The bounds `(lo, hi)` of a box.
+        pub(crate) fn bounds(&mut self) -> ([f32; 3], [f32; 3]) {
+            const VALS: [f32; 9] = [
+                -1.0,
+                0.0,
+                -0.0,
+                0.25,
+                0.5,
+                1.0,
+                f32::NAN,
+                f32::INFINITY,
+                f32::NEG_INFINITY,
+            ];
+            let lo: [f32; 3] = std::array::from_fn(|_| {
+                if self.pick(40) == 0 {
+                    VALS[6 + self.pick(3)]
+                } else {
+                    VALS[self.pick(6)]
+                }
+            });
+            let hi: [f32; 3] = std::array::from_fn(|k| {
+                if self.pick(40) == 0 {
+                    VALS[6 + self.pick(3)]
+                } else {
+                    lo[k] + [0.0, 0.25, 0.5, 1.0][self.pick(4)]
+                }
+            });
+            (lo, hi)
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -130,45 +179,11 @@ mod tests {
     /// and the portable twin is the scalar rule written out.
     #[test]
     fn the_avx2_filter_gives_the_portable_bits_nan_and_infinities_included() {
-        let vals = [
-            -1.0f32,
-            0.0,
-            -0.0,
-            0.25,
-            0.5,
-            1.0,
-            f32::NAN,
-            f32::INFINITY,
-            f32::NEG_INFINITY,
-        ];
-        let mut seed = 0x2545_f491_4f6c_dd1du64;
-        let mut pick = |n: usize| {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            (seed % n as u64) as usize
-        };
-        let bx = |pick: &mut dyn FnMut(usize) -> usize| {
-            let lo: [f32; 3] = std::array::from_fn(|_| {
-                if pick(40) == 0 {
-                    vals[6 + pick(3)]
-                } else {
-                    vals[pick(6)]
-                }
-            });
-            let hi: [f32; 3] = std::array::from_fn(|k| {
-                if pick(40) == 0 {
-                    vals[6 + pick(3)]
-                } else {
-                    lo[k] + [0.0, 0.25, 0.5, 1.0][pick(4)]
-                }
-            });
-            (lo, hi)
-        };
+        let mut rng = test_boxes::Boxes(0x2545_f491_4f6c_dd1d);
         let n = 3000;
-        let boxes: Vec<_> = (0..n + RUN).map(|_| bx(&mut pick)).collect();
+        let boxes: Vec<_> = (0..n + RUN).map(|_| rng.bounds()).collect();
         let word: Vec<u32> = (0..n + RUN)
-            .map(|j| (pick(8) as u32) << 29 | j as u32)
+            .map(|j| (rng.pick(8) as u32) << 29 | j as u32)
             .collect();
         let lo: [Vec<f32>; 3] = std::array::from_fn(|k| boxes.iter().map(|b| b.0[k]).collect());
         let hi: [Vec<f32>; 3] = std::array::from_fn(|k| boxes.iter().map(|b| b.1[k]).collect());
@@ -179,8 +194,8 @@ mod tests {
         };
         let probes: Vec<Probe> = (0..8)
             .map(|_| {
-                let (lo, hi) = bx(&mut pick);
-                let flags = (pick(8) as u32) << 29;
+                let (lo, hi) = rng.bounds();
+                let flags = (rng.pick(8) as u32) << 29;
                 Probe { lo, hi, flags }
             })
             .collect();

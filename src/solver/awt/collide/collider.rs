@@ -251,6 +251,7 @@ impl HairCollider {
             let out = &self.out;
             let helper_started = AtomicBool::new(false);
             let helper_first = self.helper_first && pool.is_some();
+            let level = crate::simd::level();
             let search = |worker: usize, k: usize| {
                 if worker > 0 {
                     helper_started.store(true, Ordering::Release);
@@ -265,7 +266,14 @@ impl HairCollider {
                 chunk.fill(0.0);
                 let o = &mut *o;
                 let start = o.contacts.len();
-                let st = broad.search(bounds[k]..bounds[k + 1], p, eps2, &mut o.contacts, chunk);
+                let st = broad.search(
+                    level,
+                    bounds[k]..bounds[k + 1],
+                    p,
+                    eps2,
+                    &mut o.contacts,
+                    chunk,
+                );
                 o.stats.add(&st);
                 o.spans[k] = Some((start, o.contacts.len()));
             };

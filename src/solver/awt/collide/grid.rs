@@ -5,7 +5,6 @@ use std::ops::Range;
 use nalgebra::Vector3;
 
 use crate::simd::boxes::{BoxTest, Entries, Probe, RUN};
-#[cfg(test)]
 use crate::simd::Level;
 
 use super::*;
@@ -97,18 +96,20 @@ pub(super) struct Broad {
 pub(super) const MIN_SEGMENTS_TO_SHARE: usize = 128;
 
 impl Broad {
-    /// Tests the pairs of cells `cells`, appending the contacts (in cell order) to `out` and
-    /// adding their shares to `loads` (one entry per node slot, see [`Response`]), in the same
-    /// order.
+    /// Tests the pairs of cells `cells` on the instruction set `level` (the caller passes
+    /// [`crate::simd::level`]; tests compare the two), appending the contacts (in cell order) to
+    /// `out` and adding their shares to `loads` (one entry per node slot, see [`Response`]), in
+    /// the same order.
     pub(super) fn search(
         &self,
+        level: Level,
         cells: Range<usize>,
         p: &ContactParams,
         eps2: f64,
         out: &mut Vec<Contact>,
         loads: &mut [f64],
     ) -> PairStats {
-        search_cells(crate::simd::level(), self, cells, p, eps2, out, loads)
+        search_cells(level, self, cells, p, eps2, out, loads)
     }
 
     /// Fills the per-segment data and the grid for a search of the segments `segs` at `pos`
@@ -143,20 +144,6 @@ impl Broad {
                 inv_child: self.inv_mass[child as usize],
             }
         }));
-    }
-
-    /// [`Self::search`] on a given instruction set (tests compare the two).
-    #[cfg(test)]
-    pub(super) fn search_at(
-        &self,
-        level: Level,
-        cells: Range<usize>,
-        p: &ContactParams,
-        eps2: f64,
-        out: &mut Vec<Contact>,
-        loads: &mut [f64],
-    ) -> PairStats {
-        search_cells(level, self, cells, p, eps2, out, loads)
     }
 
     /// Cuts the cells into [`CHUNKS`] runs of about equal work (chunk `k` is cells
@@ -455,7 +442,7 @@ mod tests {
         let cells = 0..broad.cell_start.len() - 1;
         let run = |level: Level| {
             let (mut out, mut loads) = (Vec::new(), vec![0.0; pos.len()]);
-            let stats = broad.search_at(
+            let stats = broad.search(
                 level,
                 cells.clone(),
                 &p,

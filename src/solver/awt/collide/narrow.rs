@@ -269,53 +269,23 @@ mod tests {
     #[test]
     fn the_lanes_box_test_and_adjacency_are_near_on_both_twins() {
         use crate::simd::boxes::{BoxTest, Entries, Probe, RUN};
-        use crate::simd::dispatch::{Avx2, Portable};
+        use crate::simd::dispatch::Portable;
         crate::simd::dispatch::multiversion! {
             fn first<I: BoxTest>(probe: &Probe, e: &Entries) -> u32 {
                 I::run8(probe, e, 0).1 & 1
             }
         }
-        let vals = [
-            -1.0f32,
-            0.0,
-            -0.0,
-            0.25,
-            0.5,
-            1.0,
-            f32::NAN,
-            f32::INFINITY,
-            f32::NEG_INFINITY,
-        ];
-        let mut seed = 0x2545_f491_4f6c_dd1du64;
-        let mut pick = |n: usize| {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            (seed % n as u64) as usize
-        };
+        let mut rng = crate::simd::boxes::test_boxes::Boxes(0x2545_f491_4f6c_dd1d);
         let (mut near_count, mut total) = (0, 0);
         for _ in 0..20_000 {
             let mut bx = || {
-                let lo: [f32; 3] = std::array::from_fn(|_| {
-                    if pick(50) == 0 {
-                        vals[6 + pick(3)]
-                    } else {
-                        vals[pick(6)]
-                    }
-                });
-                let hi: [f32; 3] = std::array::from_fn(|k| {
-                    if pick(50) == 0 {
-                        vals[6 + pick(3)]
-                    } else {
-                        lo[k] + [0.0, 0.25, 0.5, 1.0][pick(4)]
-                    }
-                });
+                let (lo, hi) = rng.bounds();
                 SegBox {
                     lo,
                     hi,
-                    parent: pick(6) as u32,
-                    child: 6 + pick(6) as u32,
-                    chain: pick(8) as u32,
+                    parent: rng.pick(6) as u32,
+                    child: 6 + rng.pick(6) as u32,
+                    chain: rng.pick(8) as u32,
                 }
             };
             let (a, b) = (bx(), bx());
@@ -338,7 +308,6 @@ mod tests {
             near_count += usize::from(want);
             total += 1;
         }
-        let _ = Avx2;
         assert!(
             near_count > total / 20 && near_count < total * 19 / 20,
             "{near_count} of {total}"
