@@ -49,7 +49,7 @@ pub(super) struct WorkerOut {
 /// on data already in the cell list, without a pair set or a lookup of the ranges.
 ///
 /// Per-segment data is split by temperature: the pair loop reads the cell entries' boxes from
-/// arrays kept in cell-list order beside `items` (eight at a time, see [`Broad::search`]), the
+/// arrays kept in cell-list order beside `items` (eight at a time, see [`search_cells`]), the
 /// [`SegBox`]'s node slots only when the boxes overlap, and [`SegPre`] (positions, velocities,
 /// f64) only for the pairs that pass the box and adjacency tests.
 ///
@@ -266,8 +266,9 @@ impl HairCollider {
                 chunk.fill(0.0);
                 let o = &mut *o;
                 let start = o.contacts.len();
-                let st = broad.search(
+                let st = search_cells(
                     level,
+                    broad,
                     bounds[k]..bounds[k + 1],
                     p,
                     eps2,

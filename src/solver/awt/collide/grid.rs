@@ -5,7 +5,6 @@ use std::ops::Range;
 use nalgebra::Vector3;
 
 use crate::simd::boxes::{BoxTest, Entries, Probe, RUN};
-use crate::simd::Level;
 
 use super::*;
 
@@ -96,22 +95,6 @@ pub(super) struct Broad {
 pub(super) const MIN_SEGMENTS_TO_SHARE: usize = 128;
 
 impl Broad {
-    /// Tests the pairs of cells `cells` on the instruction set `level` (the caller passes
-    /// [`crate::simd::level`]; tests compare the two), appending the contacts (in cell order) to
-    /// `out` and adding their shares to `loads` (one entry per node slot, see [`Response`]), in
-    /// the same order.
-    pub(super) fn search(
-        &self,
-        level: Level,
-        cells: Range<usize>,
-        p: &ContactParams,
-        eps2: f64,
-        out: &mut Vec<Contact>,
-        loads: &mut [f64],
-    ) -> PairStats {
-        search_cells(level, self, cells, p, eps2, out, loads)
-    }
-
     /// Fills the per-segment data and the grid for a search of the segments `segs` at `pos`
     /// and `vel` (`nodes` node slots).
     pub(super) fn prepare(
@@ -268,12 +251,17 @@ impl Broad {
 }
 
 crate::simd::dispatch::multiversion! {
-    /// [`Broad::search`]'s loop, compiled for AVX2 and for the baseline. For each entry `a` of
-    /// a cell, the entries after it are filtered [`RUN`] at a time ([`BoxTest::run8`]: found
-    /// in this cell, boxes overlapping), and only the survivors, in cell order, go on to
-    /// [`adjacent`], [`moving`] and the batched narrow phase: the same pairs in the same order
-    /// as one pair at a time, so the same contacts and forces bit for bit.
-    fn search_cells<I: BoxTest>(
+    /// Tests the pairs of `broad`'s cells `cells` on the instruction set `level` (the caller
+    /// passes [`crate::simd::level`]; tests compare the two), appending the contacts (in cell
+    /// order) to `out` and adding their shares to `loads` (one entry per node slot, see
+    /// [`Response`]), in the same order. Compiled for AVX2 and for the baseline.
+    ///
+    /// For each entry `a` of a cell, the entries after it are filtered [`RUN`] at a time
+    /// ([`BoxTest::run8`]: found in this cell, boxes overlapping), and only the survivors, in
+    /// cell order, go on to [`adjacent`], [`moving`] and the batched narrow phase: the same
+    /// pairs in the same order as one pair at a time, so the same contacts and forces bit for
+    /// bit.
+    pub(super) fn search_cells<I: BoxTest>(
         broad: &Broad,
         cells: Range<usize>,
         p: &ContactParams,
@@ -384,10 +372,11 @@ impl EntryBoxes {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::simd::Level;
 
     /// The whole candidate loop on the portable twin and on the best instruction set finds the
     /// same pairs and gives the same contacts and loads bit for bit, on a tangle of strands
-    /// dense enough that cells hold dozens of entries (runs of eight with ragged ends) and
+    /// dense enough that some cells hold more than sixteen entries (runs of eight with ragged ends) and
     /// every filter rejects some pairs.
     #[test]
     fn the_search_is_the_same_on_both_twins() {
@@ -442,8 +431,9 @@ mod tests {
         let cells = 0..broad.cell_start.len() - 1;
         let run = |level: Level| {
             let (mut out, mut loads) = (Vec::new(), vec![0.0; pos.len()]);
-            let stats = broad.search(
+            let stats = search_cells(
                 level,
+                &broad,
                 cells.clone(),
                 &p,
                 p.epsilon.powi(2),
