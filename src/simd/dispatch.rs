@@ -1,7 +1,7 @@
 //! Run-time choice between a function's AVX2 build and its portable build.
 //!
 //! [`multiversion!`] defines a function compiled twice: once for the baseline processor and
-//! once inside `#[target_feature(enable = "avx2")]`, chosen per call by a [`Level`] argument
+//! once inside `#[target_feature(enable = "avx2,popcnt,bmi1,bmi2,lzcnt")]`, chosen per call by a [`Level`] argument
 //! (the caller passes [`crate::simd::level`], or a test's explicit level). Plain scalar and
 //! `[f32; 4]` code built for AVX2 uses the three-operand VEX encoding and wider vectors (the
 //! renderer's tile pass runs about 15 % faster, the guide strands' strips and articulated-body
@@ -40,20 +40,32 @@ impl Isa for Avx2 {
     const LEVEL: Level = Level::Avx2;
 }
 
-/// Whether the AVX2 build may run: `level` asks for it and the processor has it (checked
-/// here too, so that an explicit [`Level::Avx2`] on a processor without it runs the portable
-/// build rather than faulting; the check is one cached load).
+/// Whether the processor has what the AVX2 builds are compiled for: AVX2 and the
+/// bit-manipulation instructions every AVX2 processor also has (POPCNT, BMI1, BMI2, LZCNT:
+/// the loops over lane masks count and find bits with one instruction each instead of a
+/// dozen, which changes no value). Each check is one cached load.
 #[inline(always)]
-pub fn avx2_allowed(level: Level) -> bool {
+pub fn avx2_present() -> bool {
     #[cfg(target_arch = "x86_64")]
     {
-        level == Level::Avx2 && std::arch::is_x86_feature_detected!("avx2")
+        std::arch::is_x86_feature_detected!("avx2")
+            && std::arch::is_x86_feature_detected!("popcnt")
+            && std::arch::is_x86_feature_detected!("bmi1")
+            && std::arch::is_x86_feature_detected!("bmi2")
+            && std::arch::is_x86_feature_detected!("lzcnt")
     }
     #[cfg(not(target_arch = "x86_64"))]
     {
-        let _ = level;
         false
     }
+}
+
+/// Whether the AVX2 build may run: `level` asks for it and the processor has it (checked
+/// here too, so that an explicit [`Level::Avx2`] on a processor without it runs the portable
+/// build rather than faulting).
+#[inline(always)]
+pub fn avx2_allowed(level: Level) -> bool {
+    level == Level::Avx2 && avx2_present()
 }
 
 /// Defines `fn name(level: Level, args..) -> ret`, its body compiled for the baseline and for
@@ -71,7 +83,7 @@ macro_rules! multiversion {
             fn body<$I: $bound>($($arg: $ty),*) $(-> $ret)? $body
             #[cfg(target_arch = "x86_64")]
             {
-                #[target_feature(enable = "avx2")]
+                #[target_feature(enable = "avx2,popcnt,bmi1,bmi2,lzcnt")]
                 unsafe fn avx2($($arg: $ty),*) $(-> $ret)? {
                     body::<$crate::simd::dispatch::Avx2>($($arg),*)
                 }
@@ -94,7 +106,7 @@ macro_rules! multiversion {
             fn body($($arg: $ty),*) $(-> $ret)? $body
             #[cfg(target_arch = "x86_64")]
             {
-                #[target_feature(enable = "avx2")]
+                #[target_feature(enable = "avx2,popcnt,bmi1,bmi2,lzcnt")]
                 unsafe fn avx2($($arg: $ty),*) $(-> $ret)? {
                     body($($arg),*)
                 }

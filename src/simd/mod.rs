@@ -65,11 +65,9 @@ pub fn level() -> Level {
 /// The best level this processor supports, whatever `WISPTREE_SIMD` says (for tests that
 /// compare the twins).
 pub fn best_available() -> Level {
-    #[cfg(target_arch = "x86_64")]
-    {
-        if std::arch::is_x86_feature_detected!("avx2") {
-            return Level::Avx2;
-        }
+    if dispatch::avx2_present() {
+        Level::Avx2
+    } else {
+        Level::Portable
     }
-    Level::Portable
 }
