@@ -719,6 +719,10 @@ fn bad_guide_values_are_errors_naming_the_field() {
             "guides.remove_distance",
         ),
         ("guides: (strip_break: 0.5),", "guides.strip_break"),
+        (
+            "guides: (contact_search_every: 0),",
+            "guides.contact_search_every",
+        ),
     ] {
         let t = text.replacen("Style(\n", &format!("Style(\n    {bad}\n"), 1);
         assert_ne!(t, text);

@@ -124,6 +124,9 @@ pub struct GuideSolver {
     /// The threads of the strips' broad phase and contacts (none: the calling thread only).
     /// The result does not depend on it.
     pool: Option<crate::par::Pool>,
+    /// Steps since the strips' contacts were last searched (see
+    /// [`GuideParams::contact_search_every`]).
+    since_search: u32,
 }
 
 /// The head's spatial velocity `(ω; v_O)` at the world origin.
@@ -219,6 +222,7 @@ impl GuideSolver {
             show_all: true,
             disp: vec![Vector3::zeros(); cap * (n + 1)],
             last_contacts: 0,
+            since_search: u32::MAX,
             last_body: 0,
             splits: 0,
             pool: None,
@@ -499,8 +503,21 @@ impl GuideSolver {
             );
         }
         let contacts = if self.gp.collision && search {
-            self.strips
-                .detect_apply_on(self.pool.as_ref(), &mut self.chains, &self.alive, &self.gp)
+            // A fresh search every `contact_search_every` steps; in between, the contacts it
+            // found, evaluated again on the current state.
+            self.since_search = self.since_search.saturating_add(1);
+            if self.since_search >= self.gp.contact_search_every {
+                self.since_search = 0;
+                self.strips.detect_apply_on(
+                    self.pool.as_ref(),
+                    &mut self.chains,
+                    &self.alive,
+                    &self.gp,
+                )
+            } else {
+                self.strips
+                    .reapply_on(self.pool.as_ref(), &mut self.chains, &self.gp)
+            }
         } else if self.gp.collision {
             self.strips
                 .apply_on(self.pool.as_ref(), &mut self.chains, &self.gp)

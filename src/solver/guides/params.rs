@@ -38,6 +38,12 @@ pub fn validate(p: &GuideParams) -> Result<(), (String, String)> {
             format!("must be between 1 and 64, got {}", p.substeps),
         );
     }
+    if p.contact_search_every < 1 || p.contact_search_every > 16 {
+        return err(
+            "contact_search_every",
+            format!("must be between 1 and 16, got {}", p.contact_search_every),
+        );
+    }
     nonneg(p.stiffness, "stiffness")?;
     if !(0.0..=1.0).contains(&p.tip_stiffness) {
         return err(

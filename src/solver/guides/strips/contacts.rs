@@ -68,6 +68,34 @@ impl Strips {
         self.add_forces(chains)
     }
 
+    /// The contacts of the last search ([`Strips::detect_apply_on`]), evaluated again on the
+    /// chains' current positions and velocities without a search: each piece takes the pairs
+    /// it found in contact last time (a triangle's vertices, a pair of links) and keeps those
+    /// still within the contact distance, with forces from the current state, in the same
+    /// order. A pair that has come into contact since waits for the next search; a pair whose
+    /// triangle was rebuilt away ([`Strips::rebuild`] carries the others over) or whose guide
+    /// was removed is dropped, and a broken triangle is skipped as the search skips it.
+    /// Before any search there is nothing to evaluate. Returns how many are in contact.
+    pub fn reapply_on(
+        &mut self,
+        pool: Option<&Pool>,
+        chains: &mut Chains,
+        p: &GuideParams,
+    ) -> usize {
+        if self.chunks.len() != CHUNKS {
+            return 0;
+        }
+        fill_all_tangents(chains, &mut self.tangents);
+        let this = &*self;
+        let ch = &*chains;
+        let level = self.level();
+        for_each_on(pool, CHUNKS, &|c| {
+            let mut guard = this.chunks[c].lock().unwrap_or_else(|e| e.into_inner());
+            reapply_piece(level, this, c, ch, p, &mut guard);
+        });
+        self.add_forces(chains)
+    }
+
     /// Adds the pieces' contact forces to the chains' vertex forces, contact by contact in the
     /// order of one thread: the triangles' vertices, then the segments'. Returns the contacts.
     fn add_forces(&self, chains: &mut Chains) -> usize {
@@ -374,6 +402,56 @@ multiversion! {
         let mut seg = std::mem::take(&mut chunk.seg);
         seg.clear();
         this.seg_piece(c, n, &mut seg);
+        for &(la, lb) in &seg {
+            this.segment_hit(la, lb, ch, p, chunk);
+        }
+        (chunk.vt, chunk.verts, chunk.seg) = (vt, verts, seg);
+    }
+}
+
+multiversion! {
+    /// Piece `c` of [`Strips::reapply_on`]: the piece's contacts of the last search (their
+    /// triangles in order, each with its vertices in index order; then its pairs of links),
+    /// evaluated again in the same order, those of removed guides and broken triangles left
+    /// out.
+    fn reapply_piece(
+        this: &Strips,
+        _c: usize,
+        ch: &Chains,
+        p: &GuideParams,
+        chunk: &mut Chunk,
+    ) {
+        let n = ch.n;
+        let alive = |v: u32| ch.alive[v as usize / (n + 1)];
+        let mut vt = std::mem::take(&mut chunk.vt);
+        let mut verts = std::mem::take(&mut chunk.verts);
+        let mut seg = std::mem::take(&mut chunk.seg);
+        vt.clear();
+        vt.extend(
+            chunk
+                .tri_hits
+                .iter()
+                .filter(|h| alive(h.v) && !this.broken[h.t as usize])
+                .map(|h| (h.v, h.t)),
+        );
+        // A link's first vertex `g·(n + 1) + i` is link `g·n + i`.
+        let link = |v: u32| (v as usize / (n + 1) * n + v as usize % (n + 1)) as u32;
+        seg.clear();
+        seg.extend(
+            chunk
+                .seg_hits
+                .iter()
+                .filter(|h| alive(h.va) && alive(h.vb))
+                .map(|h| (link(h.va), link(h.vb))),
+        );
+        chunk.tri_hits.clear();
+        chunk.seg_hits.clear();
+        chunk.count = 0;
+        for group in vt.chunk_by(|a, b| a.1 == b.1) {
+            verts.clear();
+            verts.extend(group.iter().map(|&(v, _)| v));
+            this.triangle_hits(group[0].1 as usize, &verts, ch, p, Bounds::Test, chunk);
+        }
         for &(la, lb) in &seg {
             this.segment_hit(la, lb, ch, p, chunk);
         }

@@ -146,6 +146,15 @@ struct SegHit {
     cd: f64,
 }
 
+/// Reused buffers of [`Strips::rebuild`]: the strips before it, the strips after it sorted
+/// (with their index), and per strip before it its index after it.
+#[derive(Debug, Default)]
+struct RebuildScratch {
+    old_pairs: Vec<(u32, u32)>,
+    sorted: Vec<((u32, u32), u32)>,
+    strip_now: Vec<Option<u32>>,
+}
+
 /// What one piece of work found.
 #[derive(Debug, Default)]
 struct Chunk {
@@ -200,6 +209,8 @@ pub struct Strips {
     grid: VertexGrid,
     /// The pieces' findings.
     chunks: Vec<Mutex<Chunk>>,
+    /// Scratch of [`Strips::rebuild`] carrying the last contacts over.
+    rebuild_scratch: RebuildScratch,
     /// The instruction set the pieces run on, and the guides' runs too (the solver's one
     /// setting): `None` for the process's ([`crate::simd::level`]); tests pin one to compare
     /// the AVX2 build with the portable one.
@@ -280,6 +291,9 @@ impl Strips {
         rest: &[Vector3<f64>],
         min_width: f64,
     ) {
+        let mut old_pairs = std::mem::take(&mut self.rebuild_scratch.old_pairs);
+        old_pairs.clear();
+        old_pairs.extend_from_slice(&self.pairs);
         self.pairs.clear();
         self.pairs.extend_from_slice(pairs);
         self.tri.clear();
@@ -300,6 +314,42 @@ impl Strips {
                     self.tri_guides.push([a, b]);
                 }
             }
+        }
+        self.carry_hits_over(&old_pairs, n);
+        self.rebuild_scratch.old_pairs = old_pairs;
+    }
+
+    /// After a rebuild from `old_pairs`: the last contacts' triangles renumbered to the new
+    /// strips (a strip's triangles are numbered `2·n` per strip in strip order, so a triangle
+    /// keeps its place within its strip), and those of strips that are gone dropped, so that
+    /// [`Strips::reapply_on`] and the inspector read the triangles in force.
+    fn carry_hits_over(&mut self, old_pairs: &[(u32, u32)], n: usize) {
+        let per_strip = 2 * n as u32;
+        let RebuildScratch {
+            sorted, strip_now, ..
+        } = &mut self.rebuild_scratch;
+        sorted.clear();
+        sorted.extend((0u32..).zip(&self.pairs).map(|(k, &pair)| (pair, k)));
+        sorted.sort_unstable();
+        strip_now.clear();
+        strip_now.extend(old_pairs.iter().map(|pair| {
+            sorted
+                .binary_search_by(|(q, _)| q.cmp(pair))
+                .ok()
+                .map(|i| sorted[i].1)
+        }));
+        for m in &mut self.chunks {
+            let chunk = m.get_mut().unwrap_or_else(|e| e.into_inner());
+            chunk.tri_hits.retain_mut(|h| {
+                let (strip, within) = (h.t / per_strip, h.t % per_strip);
+                match strip_now.get(strip as usize).copied().flatten() {
+                    Some(k) => {
+                        h.t = k * per_strip + within;
+                        true
+                    }
+                    None => false,
+                }
+            });
         }
     }
 

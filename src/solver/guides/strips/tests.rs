@@ -321,3 +321,95 @@ fn the_avx2_build_of_the_pieces_matches_the_portable_one_bit_for_bit() {
         }
     }
 }
+
+/// Forces and damping of `c`, bit for bit.
+fn force_bits(c: &Chains) -> Vec<u64> {
+    c.f.iter()
+        .flat_map(|v| v.iter().map(|x| x.to_bits()))
+        .chain(c.damp.iter().map(|x| x.to_bits()))
+        .collect()
+}
+
+/// Between two searches, the last search's contacts evaluated again on an unchanged state
+/// are the search's own contacts with the same forces, bit for bit, on one thread or two;
+/// a vertex moved out of reach drops its contacts (and one moved into reach waits for the
+/// next search).
+#[test]
+fn the_last_contacts_evaluated_again_are_the_searched_ones() {
+    let pool = Pool::new(2).unwrap();
+    let p = GuideParams {
+        contact_distance: 0.008,
+        ..GuideParams::default()
+    };
+    let alive: Vec<usize> = (0..16).collect();
+    for seed in 1..4 {
+        for pool in [None, Some(&pool)] {
+            let (c, mut s) = tangle(seed, 16, 8);
+            let mut searched = c.clone();
+            let found = s.detect_apply_on(pool, &mut searched, &alive, &p);
+            assert!(found > 10, "seed {seed}: {found} contacts");
+            let mut again = c.clone();
+            assert_eq!(s.reapply_on(pool, &mut again, &p), found, "seed {seed}");
+            assert_eq!(force_bits(&searched), force_bits(&again), "seed {seed}");
+            // Twice in a row: the pairs are carried from evaluation to evaluation.
+            let mut third = c.clone();
+            assert_eq!(s.reapply_on(pool, &mut third, &p), found, "seed {seed}");
+            assert_eq!(force_bits(&searched), force_bits(&third), "seed {seed}");
+            // Every vertex of guide 3 flown far away: its contacts are gone.
+            let mut moved = c.clone();
+            for v in moved.verts(3) {
+                moved.x[v].x += 10.0;
+            }
+            let mut fresh = moved.clone();
+            let (_, mut s2) = tangle(seed, 16, 8);
+            let want = s2.detect_apply_on(None, &mut fresh, &alive, &p);
+            let got = s.reapply_on(pool, &mut moved, &p);
+            assert!(got < found, "seed {seed}: {got} of {found} contacts left");
+            assert!(
+                got >= want,
+                "seed {seed}: {got} kept, a search finds {want}"
+            );
+        }
+    }
+}
+
+/// A rebuild carries the last contacts over to the new numbering of the triangles: dropping
+/// a strip and evaluating again gives what a fresh search over the remaining strips gives
+/// (no contact of the state came or went), and a removed guide's contacts are dropped.
+#[test]
+fn a_rebuild_carries_the_last_contacts_over() {
+    let p = GuideParams {
+        contact_distance: 0.008,
+        ..GuideParams::default()
+    };
+    let n = 8;
+    for seed in 1..4 {
+        let (c, mut s) = tangle(seed, 16, n);
+        let alive: Vec<usize> = (0..16).collect();
+        let mut first = c.clone();
+        s.detect_apply_on(None, &mut first, &alive, &p);
+        // Strip (4, 5) gone: the later strips move down by 2·n triangles.
+        let pairs: Vec<(u32, u32)> = (1..16u32).filter(|&g| g != 5).map(|g| (g - 1, g)).collect();
+        s.rebuild(n, &pairs, &c.x.clone(), 0.001);
+        let (_, mut fresh) = tangle(seed, 16, n);
+        fresh.rebuild(n, &pairs, &c.x.clone(), 0.001);
+        let mut want = c.clone();
+        let nw = fresh.detect_apply_on(None, &mut want, &alive, &p);
+        let mut got = c.clone();
+        assert_eq!(s.reapply_on(None, &mut got, &p), nw, "seed {seed}");
+        assert_eq!(force_bits(&want), force_bits(&got), "seed {seed}");
+        // Guide 15 removed (its strip too): none of its contacts is evaluated again.
+        let mut c2 = c.clone();
+        c2.alive[15] = false;
+        let alive2: Vec<usize> = (0..15).collect();
+        let pairs2: Vec<(u32, u32)> = pairs.iter().copied().filter(|&(_, b)| b != 15).collect();
+        s.rebuild(n, &pairs2, &c.x.clone(), 0.001);
+        let (_, mut fresh2) = tangle(seed, 16, n);
+        fresh2.rebuild(n, &pairs2, &c.x.clone(), 0.001);
+        let mut want2 = c2.clone();
+        let nw2 = fresh2.detect_apply_on(None, &mut want2, &alive2, &p);
+        let mut got2 = c2.clone();
+        assert_eq!(s.reapply_on(None, &mut got2, &p), nw2, "seed {seed}");
+        assert_eq!(force_bits(&want2), force_bits(&got2), "seed {seed}");
+    }
+}
