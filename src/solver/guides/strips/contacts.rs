@@ -72,7 +72,9 @@ impl Strips {
     /// chains' current positions and velocities without a search: each piece takes the pairs
     /// it found in contact last time (a triangle's vertices, a pair of links) and keeps those
     /// still within the contact distance, with forces from the current state, in the same
-    /// order. A pair that has come into contact since waits for the next search; a pair whose
+    /// order. A pair that has come into contact since waits for the next search (and one whose
+    /// elements no longer cross by `MIN_CROSSING`, which the search asks of a new pair, keeps
+    /// its contact until then); a pair whose
     /// triangle was rebuilt away ([`Strips::rebuild`] carries the others over) or whose guide
     /// was removed is dropped, and a broken triangle is skipped as the search skips it.
     /// Before any search there is nothing to evaluate. Returns how many are in contact.
@@ -450,7 +452,9 @@ multiversion! {
         for group in vt.chunk_by(|a, b| a.1 == b.1) {
             verts.clear();
             verts.extend(group.iter().map(|&(v, _)| v));
-            this.triangle_hits(group[0].1 as usize, &verts, ch, p, Bounds::Test, chunk);
+            // Pairs in contact last time mostly still are: the bounds would turn few down and
+            // cost a prism per triangle (the exact test decides alike either way).
+            this.triangle_hits(group[0].1 as usize, &verts, ch, p, Bounds::Passed, chunk);
         }
         for &(la, lb) in &seg {
             this.segment_hit(la, lb, ch, p, chunk);
@@ -465,7 +469,9 @@ multiversion! {
 pub(super) enum Bounds {
     /// Test them: candidates listed for a whole step, at a larger reach.
     Test,
-    /// The search has just kept them within the contact distance, at these positions.
+    /// The search has just kept them within the contact distance, at these positions, or
+    /// they were in contact at the last evaluation ([`Strips::reapply_on`]): the exact test
+    /// alone decides.
     Passed,
 }
 
