@@ -56,9 +56,11 @@ impl GuideSolver {
         self.alive.iter().filter(|&&g| g >= self.initial).count()
     }
 
-    /// Checks every strip; inserts and removes guides (each rebuilds the strips and the dense
-    /// binding).
+    /// Checks every strip; inserts and removes guides, then rebuilds the strips and the dense
+    /// binding once if any came or went (nothing in the loop reads them: under `shake` on the
+    /// long styles a step inserts or removes about two).
     pub(super) fn adapt(&mut self, report: &mut StepReport) {
+        let mut changed = false;
         for p in 0..self.base_pairs.len() {
             let (a, b) = self.base_pairs[p];
             let n1 = self.gp.segments + 1;
@@ -66,7 +68,8 @@ impl GuideSolver {
             let m = self.mid[p];
             if m == NO_GUIDE {
                 if d > self.gp.insert_distance && self.inserted() < self.gp.max_inserted {
-                    if let Some(slot) = self.insert_between(a as usize, b as usize) {
+                    if let Some(slot) = self.insert_unbuilt(a as usize, b as usize) {
+                        changed = true;
                         report
                             .events
                             .push(self.event(EventKind::GuideInsert, slot, a, b, i, d));
@@ -76,8 +79,12 @@ impl GuideSolver {
                 report
                     .events
                     .push(self.event(EventKind::GuideRemove, m as usize, a, b, i, d));
-                self.remove(m as usize);
+                self.remove_unbuilt(m as usize);
+                changed = true;
             }
+        }
+        if changed {
+            self.rebuild_topology();
         }
     }
 
@@ -101,6 +108,13 @@ impl GuideSolver {
     /// Inserts a guide halfway between `a` and `b` with interpolated rest shape, positions and
     /// velocities; returns its slot (`None` if no slot is free).
     pub fn insert_between(&mut self, a: usize, b: usize) -> Option<usize> {
+        let slot = self.insert_unbuilt(a, b)?;
+        self.rebuild_topology();
+        Some(slot)
+    }
+
+    /// [`Self::insert_between`] without rebuilding the strips and the dense binding.
+    fn insert_unbuilt(&mut self, a: usize, b: usize) -> Option<usize> {
         let slot = (self.initial..self.chains.capacity()).find(|&g| !self.chains.alive[g])?;
         let n = self.gp.segments;
         let rest = blend_polyline(&self.rest_x, a, b, n);
@@ -178,7 +192,6 @@ impl GuideSolver {
             self.mid[p] = slot as u32;
         }
         self.refresh_alive();
-        self.rebuild_topology();
         Some(slot)
     }
 
@@ -204,6 +217,12 @@ impl GuideSolver {
 
     /// Removes inserted guide `g` (its strips become one again).
     pub fn remove(&mut self, g: usize) {
+        self.remove_unbuilt(g);
+        self.rebuild_topology();
+    }
+
+    /// [`Self::remove`] without rebuilding the strips and the dense binding.
+    fn remove_unbuilt(&mut self, g: usize) {
         self.chains.alive[g] = false;
         self.origin[g] = Origin::Free;
         for m in &mut self.mid {
@@ -212,7 +231,6 @@ impl GuideSolver {
             }
         }
         self.refresh_alive();
-        self.rebuild_topology();
     }
 }
 
