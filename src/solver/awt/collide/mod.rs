@@ -86,7 +86,7 @@
 //!   ahead. Before that
 //!   (2026-12-06), the box test alone was two SSE compares on an aligned copy of each
 //!   segment's bounds, read through the cell list's index: 3–4 % off the stage.
-//!   The rest of this point is older.//!   The rest of this point is older. Testing a voxel's segments eight pairs at a time (box,
+//!   The rest of this point is older. Testing a voxel's segments eight pairs at a time (box,
 //!   adjacency and relative-motion tests in AVX2 lanes over a per-voxel copy) was tried and
 //!   measured no faster, under `lean` and under `shake` at split threshold 0.05 alike: the
 //!   mask test rejects most visits for a few instructions, and the cost is in the pairs that

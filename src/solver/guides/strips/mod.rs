@@ -23,12 +23,16 @@
 //! that has just come into contact waits one step. A strip rebuilt by an adaptive guide
 //! (§4.3; about twice a step on Long and Long curly under `shake`) renumbers the last
 //! contacts' triangles rather than forcing a search ([`Strips::rebuild`]). Measured
-//! (2026-12-07, `examples/layered_probe STYLE shake 5 guides`, the guides' step alone on two
-//! threads): 1.2× (Short) and 1.3× (Long curly) as fast as a search every step, the kinetic
-//! energy after 5 s within 2 % (Short under `stop`, `jump`) and 2 % (Long curly under `shake`).
+//! (2026-12-07, `examples/layered_probe STYLE MOTION 6 guides` against the same style with
+//! `guides: (contact_search_every: 1)`): the guides' step alone on two threads 1.2× (Short)
+//! and 1.3× (Long curly) as fast under `shake`; the kinetic energy, read once a second, within
+//! 3 % at rest under `stop`, within 1–10 % under `jump` (36 % once on Long curly at 5 s, a
+//! quiet moment: 5.5e-2 against 4.1e-2 J), and 0–14 % higher under `shake` (Short 0.25–0.28
+//! against 0.24–0.25 J). `wisptree bench --live --rows guides` against the build before,
+//! alternated three times: after ÷ before median 1.28 over the 60 pairs of rows.
 //! Two other ways of searching less often were measured that day and left:
-//! * **The last contacts' forces held** (added again unchanged on the step between): as fast,
-//!   but a one-step lag on a stiff, strongly damped spring feeds energy in: Short under
+//! * **The last contacts' forces held** (added again unchanged on the step between): faster still
+//!   (1.4–1.5×), but a one-step lag on a stiff, strongly damped spring feeds energy in: Short under
 //!   `stop` kept 20× the kinetic energy at rest (2.2–2.9e-3 J against 1.3e-4 from 3 s on), a
 //!   visible jitter.
 //! * **The candidates within twice the contact distance**, searched every second step and
