@@ -1,8 +1,9 @@
 //! Run-time choice between a function's AVX2 build and its portable build.
 //!
 //! [`multiversion!`] defines a function compiled twice: once for the baseline processor and
-//! once inside `#[target_feature(enable = "avx2,popcnt,bmi1,bmi2,lzcnt")]`, chosen per call by a [`Level`] argument
-//! (the caller passes [`crate::simd::level`], or a test's explicit level). Plain scalar and
+//! once inside `#[target_feature(enable = "avx2,popcnt,bmi1,bmi2,lzcnt")]` (see
+//! [`avx2_present`]), chosen per call by a [`Level`] argument (the caller passes
+//! [`crate::simd::level`], or a test's explicit level). Plain scalar and
 //! `[f32; 4]` code built for AVX2 uses the three-operand VEX encoding and wider vectors (the
 //! renderer's tile pass runs about 15 % faster, the guide strands' strips and articulated-body
 //! runs 1–5 %); fused multiply-add is never enabled, so both builds compute every value bit

@@ -31,10 +31,10 @@
 //! against 0.24–0.25 J). `wisptree bench --live --rows guides` against the build before,
 //! alternated three times: after ÷ before median 1.28 over the 60 pairs of rows.
 //! Two other ways of searching less often were measured that day and left:
-//! * **The last contacts' forces held** (added again unchanged on the step between): faster still
-//!   (1.4–1.5×), but a one-step lag on a stiff, strongly damped spring feeds energy in: Short under
-//!   `stop` kept 20× the kinetic energy at rest (2.2–2.9e-3 J against 1.3e-4 from 3 s on), a
-//!   visible jitter.
+//! * **The last contacts' forces held** (added again unchanged on the step between): faster
+//!   still (1.4–1.5×), but a one-step lag on a stiff, strongly damped spring feeds energy in:
+//!   Short under `stop` kept 20× the kinetic energy at rest (2.2–2.9e-3 J against 1.3e-4 from
+//!   3 s on), a visible jitter.
 //! * **The candidates within twice the contact distance**, searched every second step and
 //!   evaluated every step (as with two sub-steps): 2.5–3.6× the candidates, and slower than a
 //!   search every step (1.1–1.3×).
