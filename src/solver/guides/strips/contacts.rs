@@ -15,16 +15,28 @@ impl Strips {
     /// Each candidate is first rejected cheaply when a bound on its distance (the triangle's
     /// box, then its prism; the segments' bounding spheres) is already past the threshold.
     pub fn apply_on(&mut self, pool: Option<&Pool>, chains: &mut Chains, p: &GuideParams) -> usize {
-        fill_all_tangents(chains, &mut self.tangents);
         if self.chunks.len() != CHUNKS {
             self.chunks = (0..CHUNKS).map(|_| Mutex::default()).collect();
         }
+        self.pieces_on(pool, chains, p, contacts_piece)
+    }
+
+    /// Runs `piece` on each of the [`CHUNKS`] pieces (on the threads of `pool`), with the
+    /// tangents refreshed first, then adds their forces in piece order; returns the contacts.
+    fn pieces_on(
+        &mut self,
+        pool: Option<&Pool>,
+        chains: &mut Chains,
+        p: &GuideParams,
+        piece: fn(Level, &Strips, usize, &Chains, &GuideParams, &mut Chunk),
+    ) -> usize {
+        fill_all_tangents(chains, &mut self.tangents);
         let this = &*self;
         let ch = &*chains;
         let level = self.level();
         for_each_on(pool, CHUNKS, &|c| {
             let mut guard = this.chunks[c].lock().unwrap_or_else(|e| e.into_inner());
-            contacts_piece(level, this, c, ch, p, &mut guard);
+            piece(level, this, c, ch, p, &mut guard);
         });
         self.add_forces(chains)
     }
@@ -74,10 +86,10 @@ impl Strips {
     /// still within the contact distance, with forces from the current state, in the same
     /// order. A pair that has come into contact since waits for the next search (and one whose
     /// elements no longer cross by `MIN_CROSSING`, which the search asks of a new pair, keeps
-    /// its contact until then); a pair whose
-    /// triangle was rebuilt away ([`Strips::rebuild`] carries the others over) or whose guide
-    /// was removed is dropped, and a broken triangle is skipped as the search skips it.
-    /// Before any search there is nothing to evaluate. Returns how many are in contact.
+    /// its contact until then); a pair whose triangle was rebuilt away ([`Strips::rebuild`]
+    /// carries the others over) or whose guide was removed is dropped, and a broken triangle is
+    /// skipped as the search skips it. Before any search there is nothing to evaluate. Returns
+    /// how many are in contact.
     pub fn reapply_on(
         &mut self,
         pool: Option<&Pool>,
@@ -87,15 +99,7 @@ impl Strips {
         if self.chunks.len() != CHUNKS {
             return 0;
         }
-        fill_all_tangents(chains, &mut self.tangents);
-        let this = &*self;
-        let ch = &*chains;
-        let level = self.level();
-        for_each_on(pool, CHUNKS, &|c| {
-            let mut guard = this.chunks[c].lock().unwrap_or_else(|e| e.into_inner());
-            reapply_piece(level, this, c, ch, p, &mut guard);
-        });
-        self.add_forces(chains)
+        self.pieces_on(pool, chains, p, reapply_piece)
     }
 
     /// Adds the pieces' contact forces to the chains' vertex forces, contact by contact in the
