@@ -29,7 +29,13 @@
 //! 3 % at rest under `stop`, within 1–10 % under `jump` (36 % once on Long curly at 5 s, a
 //! quiet moment: 5.5e-2 against 4.1e-2 J), and 0–14 % higher under `shake` (Short 0.25–0.28
 //! against 0.24–0.25 J). `wisptree bench --live --rows guides` against the build before,
-//! alternated three times: after ÷ before median 1.28 over the 60 pairs of rows.
+//! alternated three times: after ÷ before median 1.28 over the 60 pairs of rows. The price
+//! is in the contacts that start between searches: the contacts acting per step, averaged
+//! over 5 s, are 1–4 % fewer under `lean`, `run`, `jump` and `stop`, but 12–20 % fewer under
+//! `shake` (Short 54k → 45k, Long 26k → 21k, Long curly 34k → 30k), where hair sweeps fast
+//! through hair and a third or more of a step's contacts can be new. With 3 the `shake` rows
+//! ran 0.90–1.10 live (against 0.83–0.94 with 2) with 27–42 % fewer contacts than with 1:
+//! too many late contacts for a default.
 //! Two other ways of searching less often were measured that day and left:
 //! * **The last contacts' forces held** (added again unchanged on the step between): faster
 //!   still (1.4–1.5×), but a one-step lag on a stiff, strongly damped spring feeds energy in:
