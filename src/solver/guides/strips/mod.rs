@@ -34,7 +34,7 @@
 //! over 5 s, are 1–4 % fewer under `lean`, `run`, `jump` and `stop`, but 12–20 % fewer under
 //! `shake` (Short 54k → 45k, Long 26k → 21k, Long curly 34k → 30k), where hair sweeps fast
 //! through hair and a third or more of a step's contacts can be new. With 3 the `shake` rows
-//! ran 0.90–1.10 live (against 0.83–0.94 with 2) with 27–42 % fewer contacts than with 1:
+//! ran 0.90–1.10 live (0.65–0.78 with 1 in the same two runs) with 27–42 % fewer contacts:
 //! too many late contacts for a default.
 //! Two other ways of searching less often were measured that day and left:
 //! * **The last contacts' forces held** (added again unchanged on the step between): faster
