@@ -43,6 +43,23 @@ fn tangle(seed: u64, guides: usize, n: usize) -> (Chains, Strips) {
     (c, s)
 }
 
+/// The contact parameters of the force tests: a contact distance the tangles' crowded guides
+/// meet often.
+fn contact_params() -> GuideParams {
+    GuideParams {
+        contact_distance: 0.008,
+        ..GuideParams::default()
+    }
+}
+
+/// Forces and damping of `c`, bit for bit.
+fn force_bits(c: &Chains) -> Vec<u64> {
+    c.f.iter()
+        .flat_map(|v| v.iter().map(|x| x.to_bits()))
+        .chain(c.damp.iter().map(|x| x.to_bits()))
+        .collect()
+}
+
 /// The vertex–triangle candidates of the last broad phase, as (vertex, triangle).
 fn vt_set(s: &Strips) -> std::collections::BTreeSet<(u32, u32)> {
     let mut out = std::collections::BTreeSet::new();
@@ -209,10 +226,7 @@ fn broad_phase_finds_every_pair_within_the_reach() {
 #[test]
 fn two_threads_give_the_same_candidates_and_forces() {
     let pool = Pool::new(2).unwrap();
-    let p = GuideParams {
-        contact_distance: 0.008,
-        ..GuideParams::default()
-    };
+    let p = contact_params();
     for seed in 1..4 {
         let (c, mut one) = tangle(seed, 16, 8);
         let (_, mut two) = tangle(seed, 16, 8);
@@ -227,12 +241,7 @@ fn two_threads_give_the_same_candidates_and_forces() {
         let nb = two.apply_on(Some(&pool), &mut cb, &p);
         assert_eq!(na, nb);
         assert!(na > 10, "seed {seed}: {na} contacts");
-        let bits = |c: &Chains| {
-            let f = c.f.iter().flat_map(|v| v.iter().map(|x| x.to_bits()));
-            f.chain(c.damp.iter().map(|x| x.to_bits()))
-                .collect::<Vec<u64>>()
-        };
-        assert_eq!(bits(&ca), bits(&cb), "seed {seed}");
+        assert_eq!(force_bits(&ca), force_bits(&cb), "seed {seed}");
     }
 }
 
@@ -242,10 +251,7 @@ fn two_threads_give_the_same_candidates_and_forces() {
 #[test]
 fn searching_while_evaluating_gives_the_same_forces() {
     let pool = Pool::new(2).unwrap();
-    let p = GuideParams {
-        contact_distance: 0.008,
-        ..GuideParams::default()
-    };
+    let p = contact_params();
     for seed in 1..4 {
         let (c, mut listed) = tangle(seed, 16, 8);
         let alive: Vec<usize> = (0..16).collect();
@@ -259,12 +265,7 @@ fn searching_while_evaluating_gives_the_same_forces() {
             let nb = fused.detect_apply_on(pool, &mut cb, &alive, &p);
             assert_eq!(na, nb, "seed {seed}");
             assert_eq!(listed.candidates(), fused.candidates(), "seed {seed}");
-            let bits = |c: &Chains| {
-                let f = c.f.iter().flat_map(|v| v.iter().map(|x| x.to_bits()));
-                f.chain(c.damp.iter().map(|x| x.to_bits()))
-                    .collect::<Vec<u64>>()
-            };
-            assert_eq!(bits(&ca), bits(&cb), "seed {seed}");
+            assert_eq!(force_bits(&ca), force_bits(&cb), "seed {seed}");
         }
     }
 }
@@ -275,10 +276,7 @@ fn searching_while_evaluating_gives_the_same_forces() {
 /// processor has no AVX2 both runs take the portable build; CI's machines have it.)
 #[test]
 fn the_avx2_build_of_the_pieces_matches_the_portable_one_bit_for_bit() {
-    let p = GuideParams {
-        contact_distance: 0.008,
-        ..GuideParams::default()
-    };
+    let p = contact_params();
     let alive: Vec<usize> = (0..24).collect();
     let run = |seed: u64, level: Level, fused: bool| {
         let (c, mut s) = tangle(seed, 24, 10);
@@ -290,13 +288,12 @@ fn the_avx2_build_of_the_pieces_matches_the_portable_one_bit_for_bit() {
             s.detect_on(None, &c, &alive, 2.0 * p.contact_distance);
             s.apply_on(None, &mut forces, &p)
         };
-        let bits: Vec<u64> = forces
-            .f
-            .iter()
-            .flat_map(|v| v.iter().map(|x| x.to_bits()))
-            .chain(forces.damp.iter().map(|x| x.to_bits()))
-            .collect();
-        (contacts, s.candidates(), s.seg_pairs.clone(), bits)
+        (
+            contacts,
+            s.candidates(),
+            s.seg_pairs.clone(),
+            force_bits(&forces),
+        )
     };
     let best = crate::simd::best_available();
     for seed in 1..6 {
@@ -322,14 +319,6 @@ fn the_avx2_build_of_the_pieces_matches_the_portable_one_bit_for_bit() {
     }
 }
 
-/// Forces and damping of `c`, bit for bit.
-fn force_bits(c: &Chains) -> Vec<u64> {
-    c.f.iter()
-        .flat_map(|v| v.iter().map(|x| x.to_bits()))
-        .chain(c.damp.iter().map(|x| x.to_bits()))
-        .collect()
-}
-
 /// Between two searches, the last search's contacts evaluated again on an unchanged state
 /// are the search's own contacts with the same forces, bit for bit, on one thread or two;
 /// a vertex moved out of reach drops its contacts (and one moved into reach waits for the
@@ -337,10 +326,7 @@ fn force_bits(c: &Chains) -> Vec<u64> {
 #[test]
 fn the_last_contacts_evaluated_again_are_the_searched_ones() {
     let pool = Pool::new(2).unwrap();
-    let p = GuideParams {
-        contact_distance: 0.008,
-        ..GuideParams::default()
-    };
+    let p = contact_params();
     let alive: Vec<usize> = (0..16).collect();
     for seed in 1..4 {
         for pool in [None, Some(&pool)] {
@@ -375,10 +361,7 @@ fn the_last_contacts_evaluated_again_are_the_searched_ones() {
 
 /// A search of `c` over the strips `pairs` of `tangle(seed, 16, 8)`: its contacts and forces.
 fn fresh_search(seed: u64, pairs: &[(u32, u32)], c: &Chains, alive: &[usize]) -> (usize, Vec<u64>) {
-    let p = GuideParams {
-        contact_distance: 0.008,
-        ..GuideParams::default()
-    };
+    let p = contact_params();
     let (_, mut s) = tangle(seed, 16, 8);
     s.rebuild(8, pairs, &c.x.clone(), 0.001);
     let mut forces = c.clone();
@@ -391,10 +374,7 @@ fn fresh_search(seed: u64, pairs: &[(u32, u32)], c: &Chains, alive: &[usize]) ->
 /// (no contact of the state came or went), and a removed guide's contacts are dropped.
 #[test]
 fn a_rebuild_carries_the_last_contacts_over() {
-    let p = GuideParams {
-        contact_distance: 0.008,
-        ..GuideParams::default()
-    };
+    let p = contact_params();
     let n = 8;
     for seed in 1..4 {
         let (c, mut s) = tangle(seed, 16, n);
