@@ -44,6 +44,15 @@
 //! * **The candidates within twice the contact distance**, searched every second step and
 //!   evaluated every step (as with two sub-steps): 2.5–3.6× the candidates, and slower than a
 //!   search every step (1.1–1.3×).
+//! * **The last search's candidates evaluated again** between searches, not only its contacts
+//!   (2026-12-07, the next day): a candidate pair that comes into contact in between then acts
+//!   at once. It recovers about a third of the contacts missing under `shake` (per step, 5 s
+//!   of `bench --live`: Short 44.7k → 47.0k of the 54.2k of a search every step, Short curly
+//!   48.8k → 51.1k of 58.4k, Long 21.1k → 23.1k of 26.4k, Long curly 30.2k → 31.6k of 34.4k):
+//!   most new contacts were not candidates at all. But it evaluates about twice the pairs on
+//!   the step between: the four `shake` rows alternated twice with the build before, after ÷
+//!   before median 0.95 (0.92–1.07) with the box and prism tests first, 0.93 (0.87–1.06)
+//!   without. The rows it slows are the ones nearest real time, so it did not land.
 //!
 //! Both the broad phase and a sub-step's contacts are cut into [`CHUNKS`] fixed pieces of work
 //! that the threads of a [`Pool`] take in any order; each piece writes only its own lists, and
