@@ -19,6 +19,7 @@
 //! solver      the Solver trait, the tables of tunables, the solvers: awt/ (single-level is its mode), layered/, guides/
 //! frame       the Frame snapshot: primitives, strands, body, events, stats
 //! report      what a step reports: events, counters, stats, stage timers
+//! files       never lose a user's file: the one moved aside to NAME.bak before a write
 //! error       user errors and exit codes
 //! motion      head and body motion
 //! model       the multiresolution GC hierarchy, built once from a style
@@ -34,6 +35,7 @@ pub mod bench;
 pub mod cli;
 pub mod error;
 pub mod experiment;
+pub mod files;
 pub mod frame;
 pub mod model;
 pub mod motion;

@@ -21,6 +21,7 @@ const LAYERS: &[&str] = &[
     "solver",
     "frame",
     "report",
+    "files",
     "error",
     "motion",
     "model",

@@ -502,3 +502,112 @@ fn a_recording_with_rendering_has_one_jpeg_per_frame_beside_the_debug_view() {
     assert_eq!(skipped.len() as i64, frames);
     assert!(skipped.iter().all(|(_, v)| *v == 0.0), "{skipped:?}");
 }
+
+/// Nothing the user made is lost. `--save` onto an existing file keeps it as `NAME.bak` (the
+/// SDK's file sink would truncate it) and writes a valid recording; once `NAME.bak` exists too,
+/// a run is refused with exit 2 naming both, before anything runs, and neither file changes.
+/// `bench --json` keeps an earlier report the same way. A run without a viewer and without
+/// `--save` records to the first free one of `wisptree.rrd`, `wisptree-2.rrd`, ….
+#[test]
+fn an_existing_recording_or_report_is_kept_as_a_backup_never_overwritten() {
+    let dir = tempfile::tempdir().unwrap();
+    let style = write_style(dir.path(), "0.2");
+    let bin = env!("CARGO_BIN_EXE_wisptree");
+    let out = dir.path().join("mine.rrd");
+    let bak = dir.path().join("mine.rrd.bak");
+    std::fs::write(&out, "an earlier recording").unwrap();
+    let save = |out: &Path| {
+        std::process::Command::new(bin)
+            .arg("run")
+            .arg("--style")
+            .arg(&style)
+            .args([
+                "--seconds",
+                "0.1",
+                "--strands",
+                "5",
+                "--no-render",
+                "--save",
+            ])
+            .arg(out)
+            .output()
+            .unwrap()
+    };
+    let o = save(&out);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(0), "{err}");
+    assert!(err.contains("mine.rrd.bak"), "the move is said: {err}");
+    assert_eq!(
+        std::fs::read_to_string(&bak).unwrap(),
+        "an earlier recording"
+    );
+    assert!(
+        !decode_file(&out).is_empty(),
+        "the new recording is a valid .rrd"
+    );
+    let written = std::fs::read(&out).unwrap();
+
+    let o = save(&out);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("mine.rrd") && err.contains("mine.rrd.bak") && err.contains("move one"),
+        "{err}"
+    );
+    assert!(!err.contains("panicked"), "{err}");
+    assert_eq!(std::fs::read(&out).unwrap(), written);
+    assert_eq!(
+        std::fs::read_to_string(&bak).unwrap(),
+        "an earlier recording"
+    );
+
+    let json = dir.path().join("bench.json");
+    std::fs::write(&json, "{\"mine\": 1}").unwrap();
+    let o = std::process::Command::new(bin)
+        .args(["bench", "--models"])
+        .arg(&style)
+        .args([
+            "--solvers",
+            "awt",
+            "--seconds",
+            "0.05",
+            "--no-pipeline",
+            "--json",
+        ])
+        .arg(&json)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(0), "{err}");
+    let json_bak = dir.path().join("bench.json.bak");
+    assert_eq!(std::fs::read_to_string(&json_bak).unwrap(), "{\"mine\": 1}");
+    assert!(std::fs::read_to_string(&json)
+        .unwrap()
+        .contains("\"solvers\""));
+
+    // No viewer on PATH, no --save: fresh names in the working directory.
+    let work = dir.path().join("work");
+    std::fs::create_dir(&work).unwrap();
+    for _ in 0..3 {
+        let o = std::process::Command::new(bin)
+            .current_dir(&work)
+            .env("PATH", "")
+            .arg("--style")
+            .arg(&style)
+            .args(["--seconds", "0.1", "--strands", "5", "--no-render"])
+            .output()
+            .unwrap();
+        assert_eq!(
+            o.status.code(),
+            Some(0),
+            "{}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+    }
+    let mut names: Vec<String> = std::fs::read_dir(&work)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    assert_eq!(names, ["wisptree-2.rrd", "wisptree-3.rrd", "wisptree.rrd"]);
+}

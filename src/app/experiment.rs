@@ -172,7 +172,7 @@ impl RecordingSink {
 }
 
 /// Writes an experiment's pictures as `<folder>/<name>.png`; a file already there is first
-/// moved aside to `<name>.png.bak` ([`super::backup::move_aside`]: never overwrites a file
+/// moved aside to `<name>.png.bak` ([`crate::files::move_aside`]: never overwrites a file
 /// wisptree did not write).
 pub struct PictureSink {
     /// The folder (`--out`, or [`DEFAULT_OUT`]`/<name>`).
@@ -210,7 +210,7 @@ impl PictureSink {
     /// Writes `image` as `name.png`.
     pub fn picture(&mut self, name: &str, image: &Image) -> anyhow::Result<()> {
         let path = self.folder.join(format!("{name}.png"));
-        if let Some(bak) = super::backup::move_aside(&path).context("--out")? {
+        if let Some(bak) = crate::files::move_aside(&path).context("--out")? {
             eprintln!("kept the earlier {} as {}", path.display(), bak.display());
         }
         crate::render::write_png(image, &path)
@@ -306,6 +306,13 @@ pub fn run(cmd: &ExperimentCommand) -> anyhow::Result<()> {
             all.iter().map(|e| e.name).collect::<Vec<_>>().join(", ")
         ))
     })?;
+    // Said before the experiment rather than after it.
+    if let Some(path) = &cmd.json {
+        crate::files::check_move_aside(path).context("--json")?;
+    }
+    if let Some(path) = &cmd.save {
+        crate::files::check_move_aside(path).context("--save")?;
+    }
     let opts = ExperimentOptions::default();
     let out = cmd
         .out
@@ -367,6 +374,9 @@ pub fn run(cmd: &ExperimentCommand) -> anyhow::Result<()> {
     println!("expected: {}", def.expectation);
     if let Some(path) = &cmd.json {
         let text = serde_json::to_string_pretty(&report)?;
+        if let Some(bak) = crate::files::move_aside(path).context("--json")? {
+            eprintln!("kept the earlier {} as {}", path.display(), bak.display());
+        }
         std::fs::write(path, text + "\n")
             .with_context(|| format!("writing --json {}", path.display()))?;
     }

@@ -63,7 +63,7 @@ impl OutDir {
                 .chain(&self.written)
                 .any(|(n, sum)| n == name && *sum == checksum(&old));
             if !ours {
-                if let Some(bak) = super::backup::move_aside(&path).context_out(&self.dir)? {
+                if let Some(bak) = crate::files::move_aside(&path).context_out(&self.dir)? {
                     self.moved_aside.push(bak);
                 }
             }

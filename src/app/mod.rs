@@ -22,7 +22,6 @@
 //! `export` writes `.hair` and `.tfx` files itself, and a USD layer through `export_usd` (the
 //! layer's prims) and `usda` (the text format); `export_space` checks the free space first.
 
-pub mod backup;
 mod console;
 pub mod coverage;
 pub mod experiment;

@@ -113,6 +113,7 @@ pub fn run_with(opts: RunOptions, stop: StopSignal) -> anyhow::Result<RunSummary
     // A path no recording can be written to is refused before the style loads (one line).
     if let sink::SinkChoice::Save(path) = &opts.sink {
         sink::check_save_path(path)?;
+        anyhow::Context::context(crate::files::check_move_aside(path), "--save")?;
     }
     // Load first: a bad style must not leave an empty recording or a spawned viewer behind.
     let scene = Scene::load(&opts.style, &opts.motion, opts.model)?;
@@ -303,7 +304,9 @@ fn announce(
         console.say(&format!(
             "recording {} s of simulated time to {} in the current directory",
             seconds.unwrap_or(DEFAULT_RECORD_SECONDS),
-            sink::DEFAULT_RRD
+            sink.file
+                .as_deref()
+                .map_or_else(|| sink::DEFAULT_RRD.into(), |p| p.display().to_string())
         ));
     }
 }

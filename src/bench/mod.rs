@@ -364,6 +364,15 @@ fn bench_styles(
 
 /// `wisptree bench`.
 pub fn run(o: &BenchOptions) -> anyhow::Result<()> {
+    use anyhow::Context as _;
+    // Said before the benchmarks rather than after them: a --json or --rrd file that could not
+    // be moved aside.
+    if let Some(path) = &o.json {
+        crate::files::check_move_aside(path).context("--json")?;
+    }
+    if let Some(path) = &o.rrd {
+        crate::files::check_move_aside(path).context("--rrd")?;
+    }
     // Progress in 10 ms steps (only the bar's length depends on it).
     let per_run = steps_for(o.seconds, 0.01) as u64;
     let runs = if o.live {
@@ -443,8 +452,10 @@ pub fn run(o: &BenchOptions) -> anyhow::Result<()> {
         render::print_render(&report.render);
     }
     if let Some(path) = &o.json {
-        use anyhow::Context as _;
         let text = serde_json::to_string_pretty(&report)?;
+        if let Some(bak) = crate::files::move_aside(path).context("--json")? {
+            eprintln!("kept the earlier {} as {}", path.display(), bak.display());
+        }
         std::fs::write(path, text + "\n")
             .with_context(|| format!("writing --json {}", path.display()))?;
     }

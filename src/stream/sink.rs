@@ -12,7 +12,8 @@ use anyhow::Context as _;
 use rerun::sink::{GrpcSink, GrpcSinkConnectionState, LogSink, SinkFlushError};
 use rerun::RecordingStream;
 
-/// The file written when no viewer can be spawned and no sink is asked for.
+/// The file written when no viewer can be spawned and no sink is asked for (or the first free
+/// one of `wisptree-2.rrd`, `wisptree-3.rrd`, …: see [`default_rrd_path`]).
 pub const DEFAULT_RRD: &str = "wisptree.rrd";
 /// The URL `--connect` uses without one.
 pub const DEFAULT_CONNECT_URL: &str = rerun::DEFAULT_CONNECT_URL;
@@ -247,11 +248,37 @@ pub fn check_save_path(path: &Path) -> Result<(), crate::error::BadInput> {
     }
 }
 
-fn save(path: &Path) -> anyhow::Result<RecordingStream> {
+/// Checks `path` as [`check_save_path`] does, then moves a file already there aside to
+/// `NAME.bak` (the SDK's file sink truncates: an earlier recording would be lost), saying so on
+/// standard error; refuses, naming both, when that backup exists too.
+pub fn prepare_save_path(path: &Path) -> anyhow::Result<()> {
     check_save_path(path)?;
+    if let Some(bak) = crate::files::move_aside(path).context("--save")? {
+        eprintln!("kept the earlier {} as {}", path.display(), bak.display());
+    }
+    Ok(())
+}
+
+fn save(path: &Path) -> anyhow::Result<RecordingStream> {
+    prepare_save_path(path)?;
     rerun::RecordingStreamBuilder::new(APP_ID)
         .save(path)
         .with_context(|| format!("{}: cannot create the recording", path.display()))
+}
+
+/// The file a run records to when no viewer starts and no sink was asked for: [`DEFAULT_RRD`]
+/// in `dir`, or, when that exists, the first of `wisptree-2.rrd`, `wisptree-3.rrd`, … that does
+/// not, so that running again never replaces (nor backs up, nor refuses) an earlier run's.
+pub fn default_rrd_path(dir: &Path) -> PathBuf {
+    let stem = DEFAULT_RRD.trim_end_matches(".rrd");
+    (1..=100_000u32)
+        .map(|k| match k {
+            1 => dir.join(DEFAULT_RRD),
+            k => dir.join(format!("{stem}-{k}.rrd")),
+        })
+        .find(|p| p.symlink_metadata().is_err())
+        // A hundred thousand earlier recordings: the last name, moved aside by `save`.
+        .unwrap_or_else(|| dir.join(format!("{stem}-100000.rrd")))
 }
 
 /// The version of the Rerun SDK (the viewer should match it).
@@ -304,7 +331,7 @@ pub fn open_sink(choice: &SinkChoice) -> anyhow::Result<OpenSink> {
             }
             Err(why) if *choice == SinkChoice::Spawn => Err(anyhow::anyhow!("--spawn: {why}")),
             Err(why) => {
-                let path = PathBuf::from(DEFAULT_RRD);
+                let path = default_rrd_path(Path::new(""));
                 let mut s = plain(
                     save(&path)?,
                     Some(path.clone()),

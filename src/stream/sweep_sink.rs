@@ -12,7 +12,7 @@ pub fn open_sink_with_id(choice: &SinkChoice, recording_id: &str) -> anyhow::Res
     let builder = || rerun::RecordingStreamBuilder::new(APP_ID).recording_id(recording_id);
     match choice {
         SinkChoice::Save(path) => {
-            super::sink::check_save_path(path)?;
+            super::sink::prepare_save_path(path)?;
             let rec = builder()
                 .save(path)
                 .with_context(|| format!("{}: cannot create the recording", path.display()))?;
