@@ -173,9 +173,26 @@ fn zhang_fig14_command_prints_records_and_saves_its_picture() {
     assert_eq!(code, 0, "{err}");
     let bak = dir.path().join("pictures/zhang_fig14.png.bak");
     assert!(png.exists() && bak.exists());
-    // A third run would lose the first picture: it stops instead, both files kept.
+    // The first run's numbers and recording are kept the same way.
+    for kept in ["fig14.json.bak", "fig14.rrd.bak"] {
+        assert!(dir.path().join(kept).exists(), "{kept}");
+    }
+    // A third run would lose the first run's files: it stops before running, every file kept.
     let (png_bytes, bak_bytes) = (std::fs::read(&png).unwrap(), std::fs::read(&bak).unwrap());
+    let json_bytes = std::fs::read(p("fig14.json")).unwrap();
     let (code, _, err) = wisptree(&args);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("fig14.json.bak"), "{err}");
+    assert_eq!(std::fs::read(p("fig14.json")).unwrap(), json_bytes);
+    // With new names for the numbers and the recording, the picture stops it, both kept.
+    let (code, _, err) = wisptree(&[
+        "experiment",
+        "zhang-fig14",
+        "--json",
+        &p("again.json"),
+        "--out",
+        &p("pictures"),
+    ]);
     assert_eq!(code, 2, "{err}");
     assert!(err.contains("zhang_fig14.png.bak"), "{err}");
     assert_eq!(std::fs::read(&png).unwrap(), png_bytes);
