@@ -295,3 +295,45 @@ fn a_usd_output_that_cannot_be_written_exits_2_naming_it_and_leaves_no_file() {
         .collect();
     assert!(left.is_empty(), "left behind: {left:?}");
 }
+
+/// A layer written where one already is keeps the earlier one as `NAME.bak`; with that backup
+/// there too, the export exits 2 naming both before it runs, and neither file changes.
+#[test]
+fn a_usd_layer_never_replaces_an_existing_file_without_a_backup() {
+    let dir = tempfile::tempdir().unwrap();
+    let style = small_style(dir.path());
+    let out = dir.path().join("hair.usda");
+    let bak = dir.path().join("hair.usda.bak");
+    std::fs::write(&out, "#usda 1.0\n# the user's own layer\n").unwrap();
+    let path = out.to_string_lossy().into_owned();
+    let args = [
+        "export",
+        "--style",
+        &style,
+        "--seconds",
+        "0.08",
+        "--format",
+        "usd",
+        "--out",
+        &path,
+    ];
+    let (code, _, err) = wisptree(&args);
+    assert_eq!(code, 0, "{err}");
+    assert!(err.contains("hair.usda.bak"), "the move is said: {err}");
+    assert!(std::fs::read_to_string(&bak)
+        .unwrap()
+        .contains("the user's own layer"));
+    let written = std::fs::read(&out).unwrap();
+    assert!(written.starts_with(b"#usda 1.0"));
+    assert!(written.len() > 1000, "a new layer: {} bytes", written.len());
+    let (code, _, err) = wisptree(&args);
+    assert_eq!(code, 2, "{err}");
+    assert!(
+        err.contains("hair.usda.bak") && err.contains("move one"),
+        "{err}"
+    );
+    assert_eq!(std::fs::read(&out).unwrap(), written);
+    assert!(std::fs::read_to_string(&bak)
+        .unwrap()
+        .contains("the user's own layer"));
+}

@@ -232,6 +232,9 @@ fn check_options(opts: &ExportOptions) -> Result<(), BadInput> {
                 "--out {out}: a USD layer written as text is named .usda (or .usd)"
             )));
         }
+        // An earlier layer there is kept as NAME.bak when this one is renamed into place:
+        // refused now, before the run, if that backup exists too.
+        crate::files::check_move_aside(&opts.out).map_err(|e| BadInput(format!("--out: {e}")))?;
     } else {
         if opts.debug_structure {
             return Err(BadInput(

@@ -171,6 +171,12 @@ impl UsdLayer {
             .map_err(|e| cannot_write(&path, e.into_error()))?;
         file.sync_all().map_err(|e| cannot_write(&path, e))?;
         drop(file);
+        // Never over a file the user has: an earlier layer is kept as NAME.bak.
+        if let Some(bak) =
+            crate::files::move_aside(&path).map_err(|e| BadInput(format!("--out: {e}")))?
+        {
+            eprintln!("kept the earlier {} as {}", path.display(), bak.display());
+        }
         std::fs::rename(&self.tmp, &self.path).map_err(|e| cannot_write(&path, e))?;
         self.renamed = true;
         Ok(std::fs::metadata(&self.path).map_or(0, |m| m.len()))
