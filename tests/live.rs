@@ -268,3 +268,59 @@ fn the_render_threads_run_at_a_lower_priority_than_the_simulation() {
         "render nice {render:?}, simulation {sim:?}"
     );
 }
+
+/// `bench --live --runs N` runs the matrix N times and reports each row's median factor with
+/// every pass's factor; a number of passes out of range is refused naming `--runs`.
+#[test]
+fn bench_live_runs_reports_the_median_of_the_passes() {
+    let dir = tempfile::tempdir().unwrap();
+    let json = dir.path().join("runs.json");
+    let bin = env!("CARGO_BIN_EXE_wisptree");
+    let out = Command::new(bin)
+        .args([
+            "bench",
+            "--live",
+            "--quick",
+            "--seconds",
+            "0.2",
+            "--runs",
+            "3",
+        ])
+        .args(["--rows", "layered short lean", "--json"])
+        .arg(&json)
+        .output()
+        .expect("wisptree runs");
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{}\n{stdout}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(stdout.contains("median of 3 passes"), "{stdout}");
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let rows = v["live"].as_array().expect("a `live` array");
+    assert_eq!(rows.len(), 1, "one row: {v}");
+    let factors: Vec<f64> = rows[0]["realtime_factors"]
+        .as_array()
+        .expect("every pass's factor")
+        .iter()
+        .map(|f| f.as_f64().unwrap())
+        .collect();
+    assert_eq!(factors.len(), 3);
+    assert!(factors.iter().all(|&f| f > 0.0), "{factors:?}");
+    let mut sorted = factors.clone();
+    sorted.sort_by(f64::total_cmp);
+    assert_eq!(rows[0]["realtime_factor"].as_f64().unwrap(), sorted[1]);
+
+    for bad in ["0", "21", "-1", "two"] {
+        let out = Command::new(bin)
+            .args(["bench", "--live", "--quick", "--runs", bad])
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "--runs {bad}: {err}");
+        assert!(err.contains("--runs"), "--runs {bad}: {err}");
+        assert!(!err.contains("panicked"), "{err}");
+    }
+}

@@ -55,9 +55,12 @@ pub struct LiveRow {
     pub render: bool,
     /// Every tunable of the row's solver in force, by the names of its table.
     pub params: std::collections::BTreeMap<&'static str, f64>,
-    /// Simulated seconds ÷ wall seconds over the row's frames.
+    /// Simulated seconds ÷ wall seconds over the row's frames (the median over the passes of
+    /// `--runs`).
     pub realtime_factor: f64,
-    /// The 95th-percentile wall time of a frame, ms.
+    /// Every pass's real-time factor, in pass order (one without `--runs`).
+    pub realtime_factors: Vec<f64>,
+    /// The 95th-percentile wall time of a frame, ms (the median over the passes).
     pub p95_frame_ms: f64,
     /// Mean and largest active nodes after a frame (guides for `guides`, skeleton points for
     /// `layered`).
@@ -168,16 +171,19 @@ pub fn select_cases(styles: &[StyleSource], only: &[String]) -> Result<Vec<LiveC
     Ok(cases)
 }
 
-/// Runs the matrix: `seconds` simulated per row on `styles`, drawing `strands` strands; only
-/// the rows [`select_cases`] picks with `only`.
+/// Runs the matrix `runs` times, pass after pass: `seconds` simulated per row on `styles`,
+/// drawing `strands` strands; only the rows [`select_cases`] picks with `only`. Each row
+/// reports its medians over the passes ([`combine_passes`]).
 pub fn bench_live(
     styles: &[StyleSource],
     seconds: f64,
     strands: usize,
     only: &[String],
+    runs: usize,
 ) -> anyhow::Result<Vec<LiveRow>> {
     let cases = select_cases(styles, only)?;
-    let progress = ProgressBar::new(cases.len() as u64);
+    let runs = runs.max(1);
+    let progress = ProgressBar::new((cases.len() * runs) as u64);
     progress.set_style(
         ProgressStyle::with_template(
             "{msg:44} [{bar:30}] {pos}/{len} rows {elapsed_precise} (eta {eta})",
@@ -193,15 +199,51 @@ pub fn bench_live(
             .map_err(|e| e.context(format!("setting up style {}", style_label(s))))?;
         scenes.push(scene);
     }
-    let mut rows = Vec::with_capacity(cases.len());
-    for case in &cases {
-        let scene = &scenes[case.style];
-        progress.set_message(case_label(case, &scene.style_name()));
-        rows.push(run_case(scene, case, seconds, strands)?);
-        progress.inc(1);
+    let mut passes: Vec<Vec<LiveRow>> = vec![Vec::with_capacity(runs); cases.len()];
+    for pass in 0..runs {
+        for (case, row_passes) in cases.iter().zip(&mut passes) {
+            let scene = &scenes[case.style];
+            let label = case_label(case, &scene.style_name());
+            progress.set_message(if runs > 1 {
+                format!("pass {}/{runs}: {label}", pass + 1)
+            } else {
+                label
+            });
+            row_passes.push(run_case(scene, case, seconds, strands)?);
+            progress.inc(1);
+        }
     }
     progress.finish_and_clear();
-    Ok(rows)
+    Ok(passes.into_iter().map(combine_passes).collect())
+}
+
+/// One row from its passes (in pass order): the median real-time factor and the median
+/// 95th-percentile frame time (the mean of the middle two for an even count), every pass's
+/// factor, and the counts of the first pass (the simulation is deterministic: every pass has
+/// the same).
+pub fn combine_passes(passes: Vec<LiveRow>) -> LiveRow {
+    let factors: Vec<f64> = passes.iter().map(|r| r.realtime_factor).collect();
+    let p95: Vec<f64> = passes.iter().map(|r| r.p95_frame_ms).collect();
+    let mut row = passes
+        .into_iter()
+        .next()
+        .expect("a row has at least one pass");
+    row.realtime_factor = median(&factors);
+    row.p95_frame_ms = median(&p95);
+    row.realtime_factors = factors;
+    row
+}
+
+/// The median of `v` (not empty): the middle value, or the mean of the middle two.
+fn median(v: &[f64]) -> f64 {
+    let mut s = v.to_vec();
+    s.sort_by(f64::total_cmp);
+    let n = s.len();
+    if n % 2 == 1 {
+        s[n / 2]
+    } else {
+        0.5 * (s[n / 2 - 1] + s[n / 2])
+    }
 }
 
 fn case_label(case: &LiveCase, style: &str) -> String {
@@ -283,6 +325,7 @@ fn run_case(
         render: case.render,
         params,
         realtime_factor: tempo.realtime_factor(),
+        realtime_factors: vec![tempo.realtime_factor()],
         p95_frame_ms: tempo.frame_ms_quantile(0.95),
         mean_active: summary.load.mean_active(),
         max_active: summary.load.active_max,
@@ -300,6 +343,13 @@ pub fn print_live(rows: &[LiveRow], seconds: f64) {
          (simulation, strands, logging; unpaced). Real-time factor = simulated ÷ wall seconds: \
          1 or more keeps up live, under 1 is slow motion."
     );
+    let passes = rows.first().map_or(1, |r| r.realtime_factors.len());
+    if passes > 1 {
+        println!(
+            "Each row: the median of {passes} passes of the matrix (the factor's range after \
+             the contacts)."
+        );
+    }
     println!(
         "{:<8} {:<12} {:<6} {:>7} {:>7} {:>6} {:>9} {:>9} {:>12} {:>11}",
         "solver",
@@ -332,11 +382,12 @@ pub fn print_live(rows: &[LiveRow], seconds: f64) {
     if let Some(w) = worst(rows.iter()) {
         println!();
         println!(
-            "worst of all: {} on {} under `{}`{}{}: ×{:.2} of real time{}",
+            "worst of all: {} on {} under `{}`{}{}{}: ×{:.2} of real time{}",
             w.solver,
             w.style,
             w.motion,
             w.split.map_or(String::new(), |v| format!(", split {v}")),
+            w.merge.map_or(String::new(), |v| format!(", merge {v}")),
             if w.render { ", rendering" } else { "" },
             w.realtime_factor,
             if w.realtime_factor >= 1.0 {
@@ -354,8 +405,16 @@ fn worst<'a>(rows: impl Iterator<Item = &'a LiveRow>) -> Option<&'a LiveRow> {
 
 fn print_row(r: &LiveRow) {
     let opt = |v: Option<f64>| v.map_or_else(|| "-".to_owned(), |v| format!("{v}"));
+    let f = &r.realtime_factors;
+    let range = if f.len() > 1 {
+        let lo = f.iter().copied().fold(f64::INFINITY, f64::min);
+        let hi = f.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        format!("  ({lo:.2}–{hi:.2})")
+    } else {
+        String::new()
+    };
     println!(
-        "{:<8} {:<12} {:<6} {:>7} {:>7} {:>6} {:>8.2}x {:>9.1} {:>7.0}/{:<7} {:>11.0}",
+        "{:<8} {:<12} {:<6} {:>7} {:>7} {:>6} {:>8.2}x {:>9.1} {:>7.0}/{:<7} {:>11.0}{range}",
         r.solver,
         r.style,
         r.motion,
@@ -400,6 +459,46 @@ mod tests {
         assert!(ends.iter().any(|c| c.split == Some(0.05)));
         assert!(ends.iter().any(|c| c.merge == Some(0.005)));
         assert_eq!(cases.iter().filter(|c| c.render).count(), 20);
+    }
+
+    fn row(factor: f64, p95: f64) -> LiveRow {
+        LiveRow {
+            solver: "awt".into(),
+            style: "long".into(),
+            motion: "shake".into(),
+            split: Some(0.2),
+            merge: Some(0.1),
+            render: false,
+            params: Default::default(),
+            realtime_factor: factor,
+            realtime_factors: vec![factor],
+            p95_frame_ms: p95,
+            mean_active: 2585.0,
+            max_active: 3584,
+            contacts_per_step: 157_800.0,
+            sim_seconds: 5.0,
+            frames: 125,
+            frame_ms: 40.0,
+        }
+    }
+
+    #[test]
+    fn a_row_of_several_passes_reports_the_medians_and_every_factor() {
+        let one = combine_passes(vec![row(1.3, 40.0)]);
+        assert_eq!(one, row(1.3, 40.0));
+        let three = combine_passes(vec![row(1.5, 30.0), row(0.9, 60.0), row(1.2, 45.0)]);
+        assert_eq!(three.realtime_factor, 1.2);
+        assert_eq!(three.p95_frame_ms, 45.0);
+        assert_eq!(three.realtime_factors, [1.5, 0.9, 1.2]);
+        assert_eq!((three.mean_active, three.max_active), (2585.0, 3584));
+        let four = combine_passes(vec![
+            row(1.0, 10.0),
+            row(4.0, 40.0),
+            row(2.0, 20.0),
+            row(3.0, 30.0),
+        ]);
+        assert_eq!(four.realtime_factor, 2.5);
+        assert_eq!(four.p95_frame_ms, 25.0);
     }
 
     #[test]

@@ -84,6 +84,8 @@ pub struct BenchOptions {
     pub live: bool,
     /// Run only the live rows whose label contains one of these texts (all when empty).
     pub live_rows: Vec<String>,
+    /// Passes of the live matrix; each row reports its medians over them.
+    pub live_runs: usize,
 }
 
 /// One row of the §5.2 table (a style under both `single-level` and `awt`), as written to JSON.
@@ -426,7 +428,7 @@ pub fn run(o: &BenchOptions) -> anyhow::Result<()> {
         Vec::new()
     };
     let live_rows = if o.live {
-        live::bench_live(&o.styles, o.seconds, o.strands, &o.live_rows)?
+        live::bench_live(&o.styles, o.seconds, o.strands, &o.live_rows, o.live_runs)?
     } else {
         Vec::new()
     };

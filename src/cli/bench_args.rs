@@ -7,6 +7,9 @@ use crate::error::BadInput;
 use crate::solver::SolverKind;
 use crate::style::builtin::StyleSource;
 
+/// Most passes `--runs` takes (each is the whole matrix: minutes).
+const MAX_LIVE_RUNS: u32 = 20;
+
 /// `wisptree bench` arguments.
 #[derive(Debug, Clone, clap::Args)]
 pub struct BenchArgs {
@@ -65,6 +68,13 @@ pub struct BenchArgs {
     /// split-0.05 and rendering row. Default: every row.
     #[arg(long, value_delimiter = ',', value_name = "TEXTS", requires = "live")]
     pub rows: Vec<String>,
+    /// With --live: run the whole matrix N times, one pass after the other (a drift of the
+    /// machine's speed then spreads over every row instead of landing on a few), and report each
+    /// row's median real-time factor and median 95th-percentile frame time, with the range of its
+    /// factors (JSON: every pass's factor under "realtime_factors"). The live targets are judged
+    /// on the median of 3.
+    #[arg(long, value_name = "N", default_value_t = 1, requires = "live")]
+    pub runs: u32,
 }
 
 impl BenchArgs {
@@ -83,6 +93,13 @@ impl BenchArgs {
             None if self.quick => 0.5,
             None => 10.0,
         };
+        if !(1..=MAX_LIVE_RUNS).contains(&self.runs) {
+            return Err(BadInput(format!(
+                "--runs must be between 1 and {MAX_LIVE_RUNS} passes of the live matrix, got {}",
+                self.runs
+            ))
+            .into());
+        }
         if self.models.is_empty() {
             return Err(BadInput("--models lists no model".into()).into());
         }
@@ -116,6 +133,7 @@ impl BenchArgs {
             render_frames: if self.quick { 3 } else { 30 },
             live: self.live,
             live_rows: self.rows.clone(),
+            live_runs: self.runs as usize,
         })
     }
 
