@@ -22,6 +22,8 @@
 //!   [`StopSignal`]: the simulation thread stops and drops its sender, the logger logs what is
 //!   queued, flushes and ends. A recording stopped this way is a complete, valid `.rrd`.
 
+use anyhow::Context as _;
+
 use crate::error::BadInput;
 use crate::scene::Scene;
 use crate::solver::SolverKind;
@@ -113,7 +115,7 @@ pub fn run_with(opts: RunOptions, stop: StopSignal) -> anyhow::Result<RunSummary
     // A path no recording can be written to is refused before the style loads (one line).
     if let sink::SinkChoice::Save(path) = &opts.sink {
         sink::check_save_path(path)?;
-        anyhow::Context::context(crate::files::check_move_aside(path), "--save")?;
+        crate::files::check_move_aside(path).context("--save")?;
     }
     // Load first: a bad style must not leave an empty recording or a spawned viewer behind.
     let scene = Scene::load(&opts.style, &opts.motion, opts.model)?;
