@@ -104,21 +104,31 @@ fn the_slow_motion_line_names_the_factor_the_model_the_strands_and_the_threshold
     }
 }
 
-#[test]
-fn bench_live_quick_has_every_solver_style_motion_the_slider_ends_and_rendering_rows() {
+/// `wisptree bench --live ARGS --json FILE`, which must succeed: its standard output and the
+/// JSON it wrote.
+fn bench_live_json(args: &[&str]) -> (String, serde_json::Value) {
     let dir = tempfile::tempdir().unwrap();
     let json = dir.path().join("live.json");
     let out = Command::new(env!("CARGO_BIN_EXE_wisptree"))
-        .args(["bench", "--live", "--quick", "--json"])
+        .args(["bench", "--live"])
+        .args(args)
+        .arg("--json")
         .arg(&json)
         .output()
         .expect("wisptree runs");
-    let stdout = String::from_utf8_lossy(&out.stdout);
+    let stdout = String::from_utf8_lossy(&out.stdout).into_owned();
     assert!(
         out.status.success(),
-        "bench --live failed: {}\n{stdout}",
+        "bench --live {args:?} failed: {}\n{stdout}",
         String::from_utf8_lossy(&out.stderr)
     );
+    let v = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    (stdout, v)
+}
+
+#[test]
+fn bench_live_quick_has_every_solver_style_motion_the_slider_ends_and_rendering_rows() {
+    let (stdout, v) = bench_live_json(&["--quick"]);
     // The worst row is printed last.
     assert!(
         stdout
@@ -129,8 +139,6 @@ fn bench_live_quick_has_every_solver_style_motion_the_slider_ends_and_rendering_
             .starts_with("worst of all"),
         "{stdout}"
     );
-    let v: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
     let rows = v["live"].as_array().expect("a `live` array");
     let styles = ["short", "short_curly", "long", "long_curly"];
     let motions = ["lean", "run", "jump", "shake", "stop"];
@@ -273,32 +281,17 @@ fn the_render_threads_run_at_a_lower_priority_than_the_simulation() {
 /// every pass's factor; a number of passes out of range is refused naming `--runs`.
 #[test]
 fn bench_live_runs_reports_the_median_of_the_passes() {
-    let dir = tempfile::tempdir().unwrap();
-    let json = dir.path().join("runs.json");
-    let bin = env!("CARGO_BIN_EXE_wisptree");
-    let out = Command::new(bin)
-        .args([
-            "bench",
-            "--live",
-            "--quick",
-            "--seconds",
-            "0.2",
-            "--runs",
-            "3",
-        ])
-        .args(["--rows", "layered short lean", "--json"])
-        .arg(&json)
-        .output()
-        .expect("wisptree runs");
-    let stdout = String::from_utf8_lossy(&out.stdout);
-    assert!(
-        out.status.success(),
-        "{}\n{stdout}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    let (stdout, v) = bench_live_json(&[
+        "--quick",
+        "--seconds",
+        "0.2",
+        "--runs",
+        "3",
+        "--rows",
+        "layered short lean",
+    ]);
     assert!(stdout.contains("median of 3 passes"), "{stdout}");
-    let v: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let bin = env!("CARGO_BIN_EXE_wisptree");
     let rows = v["live"].as_array().expect("a `live` array");
     assert_eq!(rows.len(), 1, "one row: {v}");
     let factors: Vec<f64> = rows[0]["realtime_factors"]
