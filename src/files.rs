@@ -64,9 +64,8 @@ mod tests {
 
     #[test]
     fn an_existing_file_is_moved_aside_once_and_a_second_backup_is_refused() {
-        let dir = std::env::temp_dir().join(format!("wisptree-files-{}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&dir);
-        std::fs::create_dir_all(&dir).unwrap();
+        let tmp = tempfile::tempdir().unwrap();
+        let dir = tmp.path();
         let path = dir.join("out.json");
         // Nothing there: nothing to move.
         assert_eq!(move_aside(&path).unwrap(), None);
@@ -91,6 +90,5 @@ mod tests {
         // Both files are as they were.
         assert_eq!(std::fs::read_to_string(&path).unwrap(), "second");
         assert_eq!(std::fs::read_to_string(&bak).unwrap(), "first");
-        std::fs::remove_dir_all(&dir).unwrap();
     }
 }

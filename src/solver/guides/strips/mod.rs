@@ -36,7 +36,8 @@
 //! through hair and a third or more of a step's contacts can be new. With 3 the `shake` rows
 //! ran 0.90–1.10 live (0.65–0.78 with 1 in the same two runs) with 27–42 % fewer contacts:
 //! too many late contacts for a default.
-//! Two other ways of searching less often were measured that day and left:
+//! Other ways of searching less often, measured and left (the first two when the default was
+//! set):
 //! * **The last contacts' forces held** (added again unchanged on the step between): faster
 //!   still (1.4–1.5×), but a one-step lag on a stiff, strongly damped spring feeds energy in:
 //!   Short under `stop` kept 20× the kinetic energy at rest (2.2–2.9e-3 J against 1.3e-4 from
@@ -45,7 +46,7 @@
 //!   evaluated every step (as with two sub-steps): 2.5–3.6× the candidates, and slower than a
 //!   search every step (1.1–1.3×).
 //! * **The last search's candidates evaluated again** between searches, not only its contacts
-//!   (2026-12-07, the next day): a candidate pair that comes into contact in between then acts
+//!   (2026-12-07, later that day): a candidate pair that comes into contact in between then acts
 //!   at once. It recovers about a third of the contacts missing under `shake` (per step, 5 s
 //!   of `bench --live`: Short 44.7k → 47.0k of the 54.2k of a search every step, Short curly
 //!   48.8k → 51.1k of 58.4k, Long 21.1k → 23.1k of 26.4k, Long curly 30.2k → 31.6k of 34.4k):
