@@ -23,8 +23,10 @@ fn main() -> anyhow::Result<()> {
     let per_sec = (1.0 / s.dt()).round() as usize;
     let t1 = Instant::now();
     let (mut pairs, mut inter, mut coll, mut body) = (0u64, 0.0, 0.0, 0.0);
+    let mut times = wisptree::report::StageTimes::default();
     for k in 0..steps {
         s.step(&mut r);
+        times.add(&r.counters.times);
         pairs += r.counters.pairs_tested as u64;
         for st in &r.stats {
             match st.name {
@@ -51,6 +53,22 @@ fn main() -> anyhow::Result<()> {
         pairs as f64 / secs,
         s.dt(),
         s.steps_per_frame()
+    );
+    let total = times.total().as_secs_f64();
+    let shares: Vec<String> = wisptree::report::Stage::ALL
+        .iter()
+        .map(|&st| {
+            format!(
+                "{} {:.1} %",
+                st.name(),
+                100.0 * times.get(st).as_secs_f64() / total
+            )
+        })
+        .collect();
+    println!(
+        "stages ({:.0} ms per simulated s): {}",
+        total * 1000.0 / secs,
+        shares.join(", ")
     );
     Ok(())
 }

@@ -121,6 +121,17 @@
 //!   record to a cache line, 1 %. Neither landed. (A first try of the former read 2.3× slower
 //!   because a closure in the generic kernel was not compiled for AVX2: helpers the kernel
 //!   calls must be `#[inline(always)]` functions, not closures.)
+//! * **No candidate pairs kept from step to step.** A list built once per frame and reused for
+//!   its four steps (temporal coherence, with a margin) would have to hold every pair that
+//!   comes within reach during the frame. Measured on 2026-12-07 with
+//!   `examples/coherence_probe.rs` (3 s of `shake`): every frame has splits or merges (so the
+//!   segments themselves change); the largest node displacement over a frame is 9–11 cm
+//!   (median), up to 16 cm, in the head's frame: 3 to 10 segment lengths (under `lean` on
+//!   `long`, median 2 cm, p90 9 cm); and a list with that margin holds 12–16× the pairs whose
+//!   boxes overlap at one step (`long` and `short` at their defaults, `long_curly` at split
+//!   0.05; 3.6× under `lean` on `long`). The search already tests just those pairs (under
+//!   `shake` the tested pairs are the overlapping boxes within 1 %), so the grid is rebuilt
+//!   every step.
 //! * **Filters are conservative and shared.** Box overlap (each box inflated by its own radius
 //!   and rounded outwards to f32, so two boxes overlap whenever the segments are within
 //!   `r1 + r2` on every axis), adjacency and the
