@@ -67,10 +67,12 @@ fn dist(a: [f32; 3], b: [f32; 3]) -> f64 {
         .sqrt()
 }
 
+/// The files in `dir`, but the export's manifest (`.wisptree-export`).
 fn files_in(dir: &Path) -> Vec<String> {
     let mut v: Vec<String> = std::fs::read_dir(dir)
         .unwrap()
         .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| n != ".wisptree-export")
         .collect();
     v.sort();
     v
@@ -100,6 +102,11 @@ fn hair_export_writes_every_frame_in_the_published_layout() {
     assert!(stdout.contains("wrote 5 hair files"), "{stdout}");
     let names: Vec<String> = (0..5).map(|i| format!("frame_{i:05}.hair")).collect();
     assert_eq!(files_in(&out), names, "0.2 s at 40 ms per frame");
+    let manifest = std::fs::read_to_string(out.join(".wisptree-export")).unwrap();
+    assert!(
+        names.iter().all(|n| manifest.contains(n.as_str())),
+        "the manifest lists the frames: {manifest}"
+    );
     let points = 2 * (K - 1) + 1; // Catmull-Rom, two points per span
     for name in &names {
         let bytes = std::fs::read(out.join(name)).unwrap();
@@ -279,5 +286,104 @@ fn bad_export_flags_exit_2() {
         assert_eq!(code, 2, "{args:?}: exit {code}: {err}");
         assert!(err.contains(needle), "{args:?}: `{needle}` not in: {err}");
         assert!(!err.contains("panicked"), "{args:?}: {err}");
+    }
+}
+
+/// `export --format hair` and `render` into a folder: a file the user made (or edited) where a
+/// frame goes is kept as NAME.bak, the command's own earlier files are replaced without one
+/// (also after a run stopped before its end), and a second backup is refused, exit 2.
+#[test]
+fn frame_folders_keep_a_users_file_and_replace_their_own() {
+    let dir = tempfile::tempdir().unwrap();
+    let style = small_style(dir.path());
+    for (command, ext, extra) in [
+        ("export", "hair", ["--format", "hair"]),
+        ("render", "png", ["--size", "32x24"]),
+    ] {
+        let out = dir.path().join(command);
+        std::fs::create_dir_all(&out).unwrap();
+        let out_s = out.to_string_lossy().into_owned();
+        let run = || {
+            let mut args = vec![
+                command,
+                "--style",
+                &style,
+                "--motion",
+                "still",
+                "--seconds",
+                "0.08",
+                "--out",
+                &out_s,
+            ];
+            args.extend(extra);
+            wisptree(&args)
+        };
+        let (f0, f1) = (format!("frame_00000.{ext}"), format!("frame_00001.{ext}"));
+        std::fs::write(out.join(&f1), "mine").unwrap();
+        std::fs::write(out.join("notes.txt"), "unrelated").unwrap();
+        let (code, _, err) = run();
+        assert_eq!(code, 0, "{command}: {err}");
+        assert_eq!(
+            std::fs::read_to_string(out.join(format!("{f1}.bak"))).unwrap(),
+            "mine",
+            "{command}: the user's file is kept"
+        );
+        assert!(
+            err.contains(&format!("{f1}.bak")),
+            "{command} says so: {err}"
+        );
+        let first = std::fs::read(out.join(&f0)).unwrap();
+        assert_ne!(first, b"mine");
+        // Again, and again after the manifest lost its compact form (a run stopped half-way
+        // leaves only the lines it appended): its own files are replaced, no new backup.
+        for _ in 0..2 {
+            let (code, _, err) = run();
+            assert_eq!(code, 0, "{command} again: {err}");
+            assert!(
+                !err.contains(".bak"),
+                "{command}: nothing moved aside: {err}"
+            );
+            let manifest = out.join(format!(".wisptree-{command}"));
+            let text = std::fs::read_to_string(&manifest).unwrap();
+            let appended: String = text
+                .lines()
+                .filter(|l| !l.starts_with('#'))
+                .map(|l| format!("{l}\n"))
+                .collect();
+            std::fs::write(&manifest, appended).unwrap();
+        }
+        assert_eq!(
+            std::fs::read(out.join(&f0)).unwrap(),
+            first,
+            "{command}: same bytes"
+        );
+        assert_eq!(
+            std::fs::read_to_string(out.join("notes.txt")).unwrap(),
+            "unrelated"
+        );
+        // Edited since the last run: moved aside, and with a backup already there, refused.
+        std::fs::remove_file(out.join(format!("{f1}.bak"))).unwrap();
+        std::fs::write(out.join(&f0), "edited").unwrap();
+        let (code, _, err) = run();
+        assert_eq!(code, 0, "{command}: {err}");
+        assert_eq!(
+            std::fs::read_to_string(out.join(format!("{f0}.bak"))).unwrap(),
+            "edited"
+        );
+        std::fs::write(out.join(&f0), "edited again").unwrap();
+        let (code, _, err) = run();
+        assert_eq!(code, 2, "{command} refuses: {err}");
+        assert!(
+            err.contains(&f0) && err.contains(&format!("{f0}.bak")),
+            "{err}"
+        );
+        assert_eq!(
+            std::fs::read_to_string(out.join(&f0)).unwrap(),
+            "edited again"
+        );
+        assert_eq!(
+            std::fs::read_to_string(out.join(format!("{f0}.bak"))).unwrap(),
+            "edited"
+        );
     }
 }

@@ -22,6 +22,7 @@ use crate::solver::SolverKind;
 use crate::style::{hair_file, tfx_write};
 
 use super::export_space as space;
+use super::out_dir::OutDir;
 use super::{export_usd, usda};
 
 /// Catmull-Rom points per span of the exported strands: K control points become 2K − 1.
@@ -100,8 +101,10 @@ pub fn export(opts: &ExportOptions, progress: bool) -> anyhow::Result<ExportSumm
     let frames = scene.frames_for(opts.seconds);
     let written = frames.div_ceil(u64::from(opts.every));
     space::check(opts, &scene.model, written)?;
-    let mut usd = match opts.format {
-        ExportFormat::Usd => Some(export_usd::UsdLayer::create(
+    // One USD layer, or a folder of frame files in which an earlier export's files are
+    // replaced and any other file in the way is kept as NAME.bak.
+    let mut output = match opts.format {
+        ExportFormat::Usd => Output::Usd(export_usd::UsdLayer::create(
             &opts.out,
             usda::LayerMeta {
                 default_prim: "wisptree".into(),
@@ -119,15 +122,7 @@ pub fn export(opts: &ExportOptions, progress: bool) -> anyhow::Result<ExportSumm
             scene.model.clone(),
             opts.debug_structure,
         )?),
-        ExportFormat::Hair | ExportFormat::Tfx => {
-            std::fs::create_dir_all(&opts.out).map_err(|e| {
-                BadInput(format!(
-                    "--out {}: cannot create the folder: {e}",
-                    opts.out.display()
-                ))
-            })?;
-            None
-        }
+        ExportFormat::Hair | ExportFormat::Tfx => Output::Files(OutDir::open(&opts.out, "export")?),
     };
     let bar = (progress && std::io::stderr().is_terminal()).then(|| {
         let bar = indicatif::ProgressBar::new(frames);
@@ -169,27 +164,30 @@ pub fn export(opts: &ExportOptions, progress: bool) -> anyhow::Result<ExportSumm
         }
         if index % u64::from(opts.every) == 0 {
             builder.fill(&mut *solver, &mut frame);
-            if let Some(layer) = &mut usd {
-                summary.points_per_strand = frame.strands.strand(0).len();
-                layer.frame(index, &frame, solver.pose())?;
-                if let Some(b) = &bar {
-                    b.inc(1);
+            let folder = match &mut output {
+                Output::Usd(layer) => {
+                    summary.points_per_strand = frame.strands.strand(0).len();
+                    layer.frame(index, &frame, solver.pose())?;
+                    if let Some(b) = &bar {
+                        b.inc(1);
+                    }
+                    continue;
                 }
-                continue;
-            }
+                Output::Files(folder) => folder,
+            };
             copy_strands(&frame, &mut strands);
             if opts.format == ExportFormat::Hair {
                 summary.points_per_strand = strands.first().map_or(0, Vec::len);
             }
-            let path = opts
-                .out
-                .join(format!("frame_{index:05}.{}", opts.format.extension()));
+            let name = format!("frame_{index:05}.{}", opts.format.extension());
+            let path = folder.make_way(&name)?;
             write_frame(
                 &path,
                 opts.format,
                 &strands,
                 &format!("{info}, frame {index}"),
             )?;
+            folder.written(&name)?;
             summary.bytes += std::fs::metadata(&path).map(|m| m.len()).unwrap_or(0);
             summary.files.push(path);
         }
@@ -197,14 +195,28 @@ pub fn export(opts: &ExportOptions, progress: bool) -> anyhow::Result<ExportSumm
             b.inc(1);
         }
     }
-    if let Some(layer) = usd {
-        summary.bytes = layer.finish()?;
-        summary.files.push(opts.out.clone());
-    }
-    if let Some(b) = bar {
+    if let Some(b) = &bar {
         b.finish_and_clear();
     }
+    match output {
+        Output::Usd(layer) => {
+            summary.bytes = layer.finish()?;
+            summary.files.push(opts.out.clone());
+        }
+        Output::Files(folder) => {
+            folder.finish()?;
+            folder.report_moved_aside();
+        }
+    }
     Ok(summary)
+}
+
+/// Where an export's frames go.
+enum Output {
+    /// One USD layer, a frame per time sample.
+    Usd(export_usd::UsdLayer),
+    /// A file per frame in the `--out` folder.
+    Files(OutDir),
 }
 
 /// Refuses options no export can run with.

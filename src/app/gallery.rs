@@ -14,8 +14,8 @@
 use std::io::IsTerminal as _;
 use std::path::PathBuf;
 
-use super::gallery_out::OutDir;
 use super::gallery_page::{self, ExperimentEntry, Page, Shot, StyleEntry};
+use super::out_dir::OutDir;
 use crate::experiment::{self, ExperimentOptions, FrameSink};
 use crate::frame::{BodyBuf, Frame, StrandBuf};
 use crate::pipeline::{self, FrameBuilder};
@@ -55,7 +55,7 @@ pub struct GalleryOutcome {
 
 /// `wisptree gallery`.
 pub fn run(cmd: &GalleryCommand) -> anyhow::Result<GalleryOutcome> {
-    let mut out = OutDir::open(&cmd.out)?;
+    let mut out = OutDir::open(&cmd.out, "gallery")?;
     let size = if cmd.quick { (320, 240) } else { (480, 360) };
     let experiments = experiment::all();
     let bar = progress_bar(
@@ -136,9 +136,7 @@ pub fn run(cmd: &GalleryCommand) -> anyhow::Result<GalleryOutcome> {
     bar.finish_and_clear();
     let index = out.write("index.html", gallery_page::html(&page).as_bytes())?;
     out.finish()?;
-    for bak in &out.moved_aside {
-        eprintln!("kept a file that was in the way as {}", bak.display());
-    }
+    out.report_moved_aside();
     Ok(GalleryOutcome {
         index,
         pictures,

@@ -1,7 +1,8 @@
 //! The commands that run a simulation: `wisptree run` (simulation and logging threads, keys,
 //! style reload, stop), `wisptree export`, `wisptree experiment`, `wisptree sweep` and
-//! `wisptree gallery` (`gallery`: the command; `gallery_page`: its HTML; `gallery_out`: the
-//! folder it writes, never losing a user's file).
+//! `wisptree gallery` (`gallery`: the command; `gallery_page`: its HTML). `out_dir` is the
+//! folder that `gallery`, `render` and `export` write their files into, never losing a user's
+//! file.
 //!
 //! `run`, by concern, its arrows pointing down this list:
 //!
@@ -29,10 +30,10 @@ pub mod export;
 mod export_space;
 pub mod export_usd;
 pub mod gallery;
-mod gallery_out;
 mod gallery_page;
 pub mod keys;
 mod log_thread;
+mod out_dir;
 pub mod reload;
 pub mod render_cmd;
 pub mod render_thread;

@@ -1,9 +1,11 @@
 //! `wisptree render`: simulates a style under a motion and writes the rendered hair of every
-//! frame as a PNG (`frame_00000.png`, …).
+//! frame as a PNG (`frame_00000.png`, …). A file in the way that an earlier `render` did not
+//! write is kept as `NAME.bak` ([`OutDir`]).
 
 use std::io::IsTerminal as _;
 use std::path::PathBuf;
 
+use super::out_dir::OutDir;
 use crate::error::BadInput;
 use crate::frame::Frame;
 use crate::pipeline::{self, FrameBuilder};
@@ -31,12 +33,7 @@ pub struct RenderCommand {
 /// `wisptree render`. Returns the number of images written.
 pub fn run(cmd: &RenderCommand) -> anyhow::Result<u64> {
     let scene = Scene::load(&cmd.style, &cmd.motion, cmd.model)?;
-    std::fs::create_dir_all(&cmd.out).map_err(|e| {
-        BadInput(format!(
-            "--out {}: cannot create the folder: {e}",
-            cmd.out.display()
-        ))
-    })?;
+    let mut out = OutDir::open(&cmd.out, "render")?;
     let mut renderer = Renderer::new(
         scene.loaded.style.render.clone(),
         cmd.size.0,
@@ -69,9 +66,11 @@ pub fn run(cmd: &RenderCommand) -> anyhow::Result<u64> {
             body: &frame.body,
         };
         renderer.render(&input, &camera, &mut image);
-        let path = cmd.out.join(format!("frame_{index:05}.png"));
+        let name = format!("frame_{index:05}.png");
+        let path = out.make_way(&name)?;
         write_png(&image, &path)
             .map_err(|e| anyhow::anyhow!("{}: cannot write: {e}", path.display()))?;
+        out.written(&name)?;
         if let Some(b) = &bar {
             b.inc(1);
         }
@@ -79,6 +78,8 @@ pub fn run(cmd: &RenderCommand) -> anyhow::Result<u64> {
     if let Some(b) = bar {
         b.finish_and_clear();
     }
+    out.finish()?;
+    out.report_moved_aside();
     println!(
         "wrote {frames} images of {}x{} to {}",
         cmd.size.0,

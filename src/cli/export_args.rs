@@ -23,8 +23,9 @@ pub struct ExportArgs {
     /// File format.
     #[arg(long, value_enum, default_value_t = ExportFormat::Hair)]
     pub format: ExportFormat,
-    /// The folder the files are written to (created if needed); for `usd`, the layer's file
-    /// (FILE.usda).
+    /// The folder the files are written to (created if needed; an earlier export's files there
+    /// are replaced, any other file in the way is kept as NAME.bak); for `usd`, the layer's
+    /// file (FILE.usda; an existing one is kept as FILE.usda.bak).
     #[arg(long, value_name = "DIR|FILE")]
     pub out: PathBuf,
     /// Write every n-th frame only (frames 0, n, 2n, …).

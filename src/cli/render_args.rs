@@ -20,7 +20,8 @@ pub struct RenderArgs {
     /// Simulated seconds.
     #[arg(long, value_name = "S", default_value = "1", value_parser = super::args::parse_seconds)]
     pub seconds: f64,
-    /// The folder the PNG files go to (`frame_00000.png`, …).
+    /// The folder the PNG files go to (`frame_00000.png`, …; created if needed). An earlier
+    /// render's files there are replaced; any other file in the way is kept as NAME.bak.
     #[arg(long, value_name = "DIR")]
     pub out: PathBuf,
     /// Image size, WIDTHxHEIGHT pixels.
