@@ -361,29 +361,27 @@ fn frame_folders_keep_a_users_file_and_replace_their_own() {
             std::fs::read_to_string(out.join("notes.txt")).unwrap(),
             "unrelated"
         );
-        // Edited since the last run: moved aside, and with a backup already there, refused.
+        // Edited since the last run: moved aside.
         std::fs::remove_file(out.join(format!("{f1}.bak"))).unwrap();
         std::fs::write(out.join(&f0), "edited").unwrap();
         let (code, _, err) = run();
         assert_eq!(code, 0, "{command}: {err}");
-        assert_eq!(
-            std::fs::read_to_string(out.join(format!("{f0}.bak"))).unwrap(),
-            "edited"
-        );
-        std::fs::write(out.join(&f0), "edited again").unwrap();
+        let read = |name: &str| std::fs::read_to_string(out.join(name)).unwrap();
+        assert_eq!(read(&format!("{f0}.bak")), "edited");
+        // The second frame's file in the way with its backup there too: refused before the
+        // run writes anything (the first frame would have been added to the manifest).
+        std::fs::write(out.join(&f1), "edited f1").unwrap();
+        std::fs::write(out.join(format!("{f1}.bak")), "older").unwrap();
+        let manifest = format!(".wisptree-{command}");
+        let before = read(&manifest);
         let (code, _, err) = run();
         assert_eq!(code, 2, "{command} refuses: {err}");
         assert!(
-            err.contains(&f0) && err.contains(&format!("{f0}.bak")),
+            err.contains(&f1) && err.contains(&format!("{f1}.bak")),
             "{err}"
         );
-        assert_eq!(
-            std::fs::read_to_string(out.join(&f0)).unwrap(),
-            "edited again"
-        );
-        assert_eq!(
-            std::fs::read_to_string(out.join(format!("{f0}.bak"))).unwrap(),
-            "edited"
-        );
+        assert_eq!(read(&manifest), before, "{command} wrote nothing");
+        assert_eq!(read(&f1), "edited f1");
+        assert_eq!(read(&format!("{f1}.bak")), "older");
     }
 }

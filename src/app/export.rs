@@ -122,7 +122,16 @@ pub fn export(opts: &ExportOptions, progress: bool) -> anyhow::Result<ExportSumm
             scene.model.clone(),
             opts.debug_structure,
         )?),
-        ExportFormat::Hair | ExportFormat::Tfx => Output::Files(OutDir::open(&opts.out, "export")?),
+        ExportFormat::Hair | ExportFormat::Tfx => {
+            let folder = OutDir::open(&opts.out, "export")?;
+            let every = u64::from(opts.every);
+            folder.check_names(
+                (0..frames)
+                    .step_by(every as usize)
+                    .map(|i| frame_name(opts, i)),
+            )?;
+            Output::Files(folder)
+        }
     };
     let bar = (progress && std::io::stderr().is_terminal()).then(|| {
         let bar = indicatif::ProgressBar::new(frames);
@@ -179,7 +188,7 @@ pub fn export(opts: &ExportOptions, progress: bool) -> anyhow::Result<ExportSumm
             if opts.format == ExportFormat::Hair {
                 summary.points_per_strand = strands.first().map_or(0, Vec::len);
             }
-            let name = format!("frame_{index:05}.{}", opts.format.extension());
+            let name = frame_name(opts, index);
             let path = folder.make_way(&name)?;
             write_frame(
                 &path,
@@ -209,6 +218,11 @@ pub fn export(opts: &ExportOptions, progress: bool) -> anyhow::Result<ExportSumm
         }
     }
     Ok(summary)
+}
+
+/// The file of frame `index` in the `--out` folder.
+fn frame_name(opts: &ExportOptions, index: u64) -> String {
+    format!("frame_{index:05}.{}", opts.format.extension())
 }
 
 /// Where an export's frames go.

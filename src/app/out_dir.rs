@@ -71,19 +71,36 @@ impl OutDir {
         Ok(path)
     }
 
+    /// Refuses, before any work, what [`Self::make_way`] would refuse for one of `names` (a
+    /// file in the way whose `NAME.bak` exists too), so that a long run does not stop at its
+    /// n-th file.
+    pub fn check_names(&self, names: impl IntoIterator<Item = String>) -> anyhow::Result<()> {
+        for name in names {
+            let path = self.dir.join(&name);
+            if let Ok(old) = std::fs::read(&path) {
+                if !self.is_ours(&name, checksum(&old)) {
+                    crate::files::check_move_aside(&path).context_out(&self.dir)?;
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Whether an earlier run (or this one) wrote `name` with these bytes.
+    fn is_ours(&self, name: &str, sum: u64) -> bool {
+        self.earlier
+            .iter()
+            .chain(&self.written)
+            .any(|(n, s)| n == name && *s == sum)
+    }
+
     /// Makes way for a file `name` the caller writes itself (then calls [`Self::written`]):
     /// moves a file of that name aside unless an earlier run wrote it and it is unchanged.
     /// Returns the path to write.
     pub fn make_way(&mut self, name: &str) -> anyhow::Result<PathBuf> {
         let path = self.dir.join(name);
         if let Ok(old) = std::fs::read(&path) {
-            let sum = checksum(&old);
-            let ours = self
-                .earlier
-                .iter()
-                .chain(&self.written)
-                .any(|(n, s)| n == name && *s == sum);
-            if !ours {
+            if !self.is_ours(name, checksum(&old)) {
                 if let Some(bak) = crate::files::move_aside(&path).context_out(&self.dir)? {
                     self.moved_aside.push(bak);
                 }

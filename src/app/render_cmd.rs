@@ -34,6 +34,8 @@ pub struct RenderCommand {
 pub fn run(cmd: &RenderCommand) -> anyhow::Result<u64> {
     let scene = Scene::load(&cmd.style, &cmd.motion, cmd.model)?;
     let mut out = OutDir::open(&cmd.out, "render")?;
+    let frames = scene.frames_for(cmd.seconds);
+    out.check_names((0..frames).map(frame_name))?;
     let mut renderer = Renderer::new(
         scene.loaded.style.render.clone(),
         cmd.size.0,
@@ -42,7 +44,6 @@ pub fn run(cmd: &RenderCommand) -> anyhow::Result<u64> {
     )
     .map_err(|e| BadInput(format!("rendering: {e}")))?;
     let camera = super::render_thread::scene_camera(&scene);
-    let frames = scene.frames_for(cmd.seconds);
     let bar = std::io::stderr().is_terminal().then(|| {
         let b = indicatif::ProgressBar::new(frames);
         b.set_style(
@@ -66,7 +67,7 @@ pub fn run(cmd: &RenderCommand) -> anyhow::Result<u64> {
             body: &frame.body,
         };
         renderer.render(&input, &camera, &mut image);
-        let name = format!("frame_{index:05}.png");
+        let name = frame_name(index);
         let path = out.make_way(&name)?;
         write_png(&image, &path)
             .map_err(|e| anyhow::anyhow!("{}: cannot write: {e}", path.display()))?;
@@ -87,4 +88,9 @@ pub fn run(cmd: &RenderCommand) -> anyhow::Result<u64> {
         cmd.out.display()
     );
     Ok(frames)
+}
+
+/// The image of frame `index`.
+fn frame_name(index: u64) -> String {
+    format!("frame_{index:05}.png")
 }
