@@ -11,33 +11,23 @@
 //! `cargo run --release --example coherence_probe -- STYLE MOTION [SPLIT_THRESHOLD]`
 //! (brute force over all pairs of segments: a few seconds per style).
 
+mod common;
+
 use std::collections::HashMap;
-use std::path::Path;
-use std::sync::Arc;
 
 use nalgebra::{Point3, Vector3};
-use wisptree::motion::Motion;
 use wisptree::report::StepReport;
-use wisptree::solver::awt::Simulation;
 
 /// A segment's box (min, max corners, radius included) and its parent, child and chain.
 type SegmentBox = ([f64; 3], [f64; 3], u32, u32, u32);
 
 fn main() -> anyhow::Result<()> {
     let args: Vec<String> = std::env::args().collect();
-    let style = &args[1];
-    let motion_name = &args[2];
-    let split: Option<f64> = args.get(3).and_then(|s| s.parse().ok());
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("styles");
-    let (mut loaded, model) = wisptree::scene::load_model(
-        &wisptree::style::builtin::StyleSource::File(dir.join(format!("{style}.ron"))),
-    )?;
-    if let Some(v) = split {
-        loaded.style.sim.split_threshold = v;
-    }
-    let model = Arc::new(model);
-    let motion = Motion::parse(motion_name, Point3::from(model.scalp_center))?;
-    let mut sim = Simulation::from_style(model, &loaded.style, motion, false);
+    let (Some(style), Some(motion_name)) = (args.get(1), args.get(2)) else {
+        anyhow::bail!("usage: coherence_probe STYLE MOTION [SPLIT_THRESHOLD]");
+    };
+    let split: Option<f64> = args.get(3).map(|s| s.parse()).transpose()?;
+    let (_, mut sim) = common::awt_simulation(style, motion_name, split)?;
     let mut report = StepReport::default();
     let spf = 4;
     let (mut frames, mut frames_with_events) = (0, 0);

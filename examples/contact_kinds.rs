@@ -12,13 +12,9 @@
 //!
 //! `cargo run --release --example contact_kinds -- STYLE MOTION [SPLIT_THRESHOLD]`
 
-use std::path::Path;
-use std::sync::Arc;
+mod common;
 
-use nalgebra::Point3;
-use wisptree::motion::Motion;
 use wisptree::report::StepReport;
-use wisptree::solver::awt::Simulation;
 use wisptree::solver::common::closest_segment_params;
 
 fn main() -> anyhow::Result<()> {
@@ -27,17 +23,8 @@ fn main() -> anyhow::Result<()> {
         anyhow::bail!("usage: contact_kinds STYLE MOTION [SPLIT_THRESHOLD]");
     };
     let split: Option<f64> = args.get(3).map(|s| s.parse()).transpose()?;
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("styles");
-    let (mut loaded, model) = wisptree::scene::load_model(
-        &wisptree::style::builtin::StyleSource::File(dir.join(format!("{style}.ron"))),
-    )?;
-    if let Some(v) = split {
-        loaded.style.sim.split_threshold = v;
-    }
-    let model = Arc::new(model);
-    let motion = Motion::parse(motion_name, Point3::from(model.scalp_center))?;
+    let (model, mut sim) = common::awt_simulation(style, motion_name, split)?;
     let k = model.levels[0].rest_pos.len() / model.levels[0].gc_count();
-    let mut sim = Simulation::from_style(model.clone(), &loaded.style, motion, false);
     let mut report = StepReport::default();
     // [siblings, same tree, other trees]
     let mut kinds = [0u64; 3];

@@ -6,14 +6,12 @@
 //! [--motion shake] [--split 0.05]` (the motion and the split threshold default to `lean` and
 //! the style's own).
 
-use std::path::Path;
-use std::sync::Arc;
+mod common;
+
 use std::time::Instant;
 
-use nalgebra::Point3;
-use wisptree::motion::Motion;
 use wisptree::solver::awt::collide::{ContactParams, HairCollider, PairStats};
-use wisptree::solver::awt::{Simulation, StepReport};
+use wisptree::solver::awt::StepReport;
 
 fn main() -> anyhow::Result<()> {
     let mut styles = Vec::new();
@@ -32,17 +30,8 @@ fn main() -> anyhow::Result<()> {
     if styles.is_empty() {
         styles = wisptree::bench::PAPER_MODELS.map(String::from).to_vec();
     }
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("styles");
     for style in styles {
-        let (mut loaded, model) = wisptree::scene::load_model(
-            &wisptree::style::builtin::StyleSource::File(dir.join(format!("{style}.ron"))),
-        )?;
-        if let Some(v) = split {
-            loaded.style.sim.split_threshold = v;
-        }
-        let model = Arc::new(model);
-        let motion = Motion::parse(&motion_name, Point3::from(model.scalp_center))?;
-        let mut sim = Simulation::from_style(model, &loaded.style, motion, false);
+        let (_, mut sim) = common::awt_simulation(&style, &motion_name, split)?;
         let mut report = StepReport::default();
         let mut collider = HairCollider::new();
         collider.set_threads(threads);
