@@ -124,7 +124,12 @@
 //!   test rejects nothing there and only moves the first read of the records); aligning each
 //!   record to a cache line, 1 %. Neither landed. (A first try of the former read 2.3× slower
 //!   because a closure in the generic kernel was not compiled for AVX2: helpers the kernel
-//!   calls must be `#[inline(always)]` functions, not closures.)
+//!   calls must be `#[inline(always)]` functions, not closures.) Testing adjacency in the
+//!   eight-entry filter too (parent, child and chain copied beside the boxes in cell-list
+//!   order, five integer compares per run, so a survivor no longer reads its [`SegBox`]) was
+//!   1.03× slower on 2026-12-07 (the whole `interactions long short --motion shake` process,
+//!   the two builds alternated eight times, after ÷ before wall 0.99–1.09): the compares
+//!   cost every visit, and the box read they spare was not waiting on memory.
 //! * **No candidate pairs kept from step to step.** A list built once per frame and reused for
 //!   its four steps (temporal coherence, with a margin) would have to hold every pair that
 //!   comes within reach during the frame. Measured on 2026-12-07 with
