@@ -1,6 +1,6 @@
 //! `wisptree render`: simulates a style under a motion and writes the rendered hair of every
 //! frame as a PNG (`frame_00000.png`, …). A file in the way that an earlier `render` did not
-//! write is kept as `NAME.bak` ([`OutDir`]).
+//! write is kept as `NAME.bak` (see `out_dir.rs`).
 
 use std::io::IsTerminal as _;
 use std::path::PathBuf;
