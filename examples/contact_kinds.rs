@@ -8,7 +8,9 @@
 //! * other trees: wisps of different top-level wisps.
 //!
 //! This sizes a reading DESIGN.md leaves open (should split sub-wisps rub against each other?),
-//! not something the collider does: it counts every pair by brute force.
+//! not something the collider does: it counts every pair by brute force. It also says how the
+//! contacts are grouped by pairs of chains (GCs), and how many continue to the next segment of
+//! both chains: what a pair search that walks two touching wisps along each other would reuse.
 //!
 //! `cargo run --release --example contact_kinds -- STYLE MOTION [SPLIT_THRESHOLD]`
 
@@ -29,6 +31,8 @@ fn main() -> anyhow::Result<()> {
     // [siblings, same tree, other trees]
     let mut kinds = [0u64; 3];
     let mut samples = 0;
+    // Distinct pairs of chains in contact, and contacts whose successor pair is one too.
+    let (mut chain_pairs, mut continued) = (0u64, 0u64);
     while sim.time() < 3.0 {
         for _ in 0..25 {
             sim.step(&mut report);
@@ -46,6 +50,14 @@ fn main() -> anyhow::Result<()> {
                 (l, level.super_gc[g], level.tree[g])
             })
             .collect();
+        // The next segment of each segment's chain (the one whose parent is its child).
+        let by_parent: std::collections::HashMap<(u32, u32), usize> = (0..n)
+            .map(|i| ((view.parent[i], view.chain[i]), i))
+            .collect();
+        let next: Vec<Option<usize>> = (0..n)
+            .map(|i| by_parent.get(&(view.child[i], view.chain[i])).copied())
+            .collect();
+        let mut contacts = std::collections::HashSet::new();
         for i in 0..n {
             for j in i + 1..n {
                 let (pi, ci) = (view.parent[i], view.child[i]);
@@ -69,19 +81,37 @@ fn main() -> anyhow::Result<()> {
                     2
                 };
                 kinds[kind] += 1;
+                contacts.insert((i, j));
             }
         }
+        let pairs: std::collections::HashSet<(u32, u32)> = contacts
+            .iter()
+            .map(|&(i, j)| (view.chain[i], view.chain[j]))
+            .collect();
+        chain_pairs += pairs.len() as u64;
+        continued += contacts
+            .iter()
+            .filter(|&&(i, j)| match (next[i], next[j]) {
+                (Some(a), Some(b)) => contacts.contains(&(a.min(b), a.max(b))),
+                _ => false,
+            })
+            .count() as u64;
         samples += 1;
     }
     let total: u64 = kinds.iter().sum();
     let share = |x: u64| 100.0 * x as f64 / total.max(1) as f64;
     println!(
         "{style} {motion_name} split {split:?}: {:.0} contacts per step (mean of {samples} \
-         samples): siblings {:.1} %, same top-level wisp {:.1} %, other top-level wisps {:.1} %",
+         samples): siblings {:.1} %, same top-level wisp {:.1} %, other top-level wisps {:.1} %; \
+         {:.0} pairs of chains in contact ({:.1} contacts each), {:.1} % of the contacts go on \
+         to the next segment of both chains",
         total as f64 / samples as f64,
         share(kinds[0]),
         share(kinds[1]),
         share(kinds[2]),
+        chain_pairs as f64 / samples as f64,
+        total as f64 / chain_pairs.max(1) as f64,
+        share(continued),
     );
     Ok(())
 }
