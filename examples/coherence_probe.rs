@@ -18,8 +18,29 @@ use std::collections::HashMap;
 use nalgebra::{Point3, Vector3};
 use wisptree::report::StepReport;
 
-/// A segment's box (min, max corners, radius included) and its parent, child and chain.
-type SegmentBox = ([f64; 3], [f64; 3], u32, u32, u32);
+/// A segment's box (radius included) and what the collider's exclusions compare.
+struct SegmentBox {
+    lo: [f64; 3],
+    hi: [f64; 3],
+    parent: u32,
+    child: u32,
+    chain: u32,
+}
+
+impl SegmentBox {
+    /// The collider never tests these pairs: adjacent segments, or two pieces of one GC.
+    fn excluded(&self, o: &SegmentBox) -> bool {
+        self.chain == o.chain
+            || [self.parent, self.child]
+                .iter()
+                .any(|n| *n == o.parent || *n == o.child)
+    }
+
+    /// Whether the two boxes, each inflated by `m`, overlap.
+    fn overlap(&self, o: &SegmentBox, m: f64) -> bool {
+        (0..3).all(|k| self.lo[k] - m <= o.hi[k] + m && o.lo[k] - m <= self.hi[k] + m)
+    }
+}
 
 fn main() -> anyhow::Result<()> {
     let args: Vec<String> = std::env::args().collect();
@@ -53,13 +74,13 @@ fn main() -> anyhow::Result<()> {
                     s.pos[view.child[i] as usize],
                 );
                 let r = view.radius[i];
-                (
-                    [0, 1, 2].map(|k| a[k].min(b[k]) - r),
-                    [0, 1, 2].map(|k| a[k].max(b[k]) + r),
-                    view.parent[i],
-                    view.child[i],
-                    view.chain[i],
-                )
+                SegmentBox {
+                    lo: [0, 1, 2].map(|k| a[k].min(b[k]) - r),
+                    hi: [0, 1, 2].map(|k| a[k].max(b[k]) + r),
+                    parent: view.parent[i],
+                    child: view.child[i],
+                    chain: view.chain[i],
+                }
             })
             .collect();
         for i in 0..view.len() {
@@ -93,10 +114,7 @@ fn main() -> anyhow::Result<()> {
             for i in 0..boxes.len() {
                 for j in i + 1..boxes.len() {
                     let (a, b) = (&boxes[i], &boxes[j]);
-                    if a.4 == b.4 || a.2 == b.2 || a.2 == b.3 || a.3 == b.2 || a.3 == b.3 {
-                        continue;
-                    }
-                    if (0..3).all(|k| a.0[k] - m <= b.1[k] + m && b.0[k] - m <= a.1[k] + m) {
+                    if !a.excluded(b) && a.overlap(b, m) {
                         n += 1;
                     }
                 }

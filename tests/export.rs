@@ -1,6 +1,6 @@
 //! `wisptree export`: the files of every n-th frame, readable as `.hair` (checked against the
 //! published layout by hand, not only by our reader) and `.tfx`, for every model; bad flags
-//! exit 2.
+//! exit 2; `export` and `render` never replace a file in their folder that they did not write.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;

@@ -124,12 +124,8 @@ pub fn export(opts: &ExportOptions, progress: bool) -> anyhow::Result<ExportSumm
         )?),
         ExportFormat::Hair | ExportFormat::Tfx => {
             let folder = OutDir::open(&opts.out, "export")?;
-            let every = u64::from(opts.every);
-            folder.check_names(
-                (0..frames)
-                    .step_by(every as usize)
-                    .map(|i| frame_name(opts, i)),
-            )?;
+            let written_frames = (0..frames).step_by(opts.every as usize);
+            folder.check_names(written_frames.map(|i| frame_name(opts, i)))?;
             Output::Files(folder)
         }
     };

@@ -76,37 +76,36 @@ impl OutDir {
     /// n-th file.
     pub fn check_names(&self, names: impl IntoIterator<Item = String>) -> anyhow::Result<()> {
         for name in names {
-            let path = self.dir.join(&name);
-            if let Ok(old) = std::fs::read(&path) {
-                if !self.is_ours(&name, checksum(&old)) {
-                    crate::files::check_move_aside(&path).context_out(&self.dir)?;
-                }
+            if let Some(path) = self.in_the_way(&name) {
+                crate::files::check_move_aside(&path).context_out(&self.dir)?;
             }
         }
         Ok(())
     }
 
-    /// Whether an earlier run (or this one) wrote `name` with these bytes.
-    fn is_ours(&self, name: &str, sum: u64) -> bool {
-        self.earlier
+    /// The path of a file `name` that is there and is not one an earlier run (or this one)
+    /// wrote, unchanged since: the file to move aside before writing `name`.
+    fn in_the_way(&self, name: &str) -> Option<PathBuf> {
+        let path = self.dir.join(name);
+        let sum = checksum(&std::fs::read(&path).ok()?);
+        let ours = self
+            .earlier
             .iter()
             .chain(&self.written)
-            .any(|(n, s)| n == name && *s == sum)
+            .any(|(n, s)| n == name && *s == sum);
+        (!ours).then_some(path)
     }
 
     /// Makes way for a file `name` the caller writes itself (then calls [`Self::written`]):
     /// moves a file of that name aside unless an earlier run wrote it and it is unchanged.
     /// Returns the path to write.
     pub fn make_way(&mut self, name: &str) -> anyhow::Result<PathBuf> {
-        let path = self.dir.join(name);
-        if let Ok(old) = std::fs::read(&path) {
-            if !self.is_ours(name, checksum(&old)) {
-                if let Some(bak) = crate::files::move_aside(&path).context_out(&self.dir)? {
-                    self.moved_aside.push(bak);
-                }
+        if let Some(path) = self.in_the_way(name) {
+            if let Some(bak) = crate::files::move_aside(&path).context_out(&self.dir)? {
+                self.moved_aside.push(bak);
             }
         }
-        Ok(path)
+        Ok(self.dir.join(name))
     }
 
     /// Records the file `name` the caller wrote after [`Self::make_way`] (reads it back for
@@ -191,7 +190,7 @@ fn parse_manifest(text: &str) -> Vec<(String, u64)> {
         .collect()
 }
 
-/// FNV-1a, 64 bits: tells "the bytes the gallery wrote" from "edited since", nothing more.
+/// FNV-1a, 64 bits: tells "the bytes a command wrote" from "edited since", nothing more.
 pub fn checksum(bytes: &[u8]) -> u64 {
     let mut h: u64 = 0xcbf2_9ce4_8422_2325;
     for &b in bytes {
