@@ -141,12 +141,17 @@ impl SegPre {
 /// relative speed (see the module docs) at or above `epsilon`.
 #[inline(always)]
 pub(super) fn moving(a: &SegPre, b: &SegPre, eps2: f64) -> bool {
-    // max(…) ≥ ε² as four independent comparisons (`f64::max` branches on NaN).
+    // max(…) ≥ ε², one difference at a time (`f64::max` branches on NaN). Whenever the hair
+    // moves the first difference already decides, so the other three are skipped: with the
+    // four always computed (non-short-circuit `|`) the whole `interactions long short --motion
+    // shake` process took 1.04× as long (before ÷ after wall, median of 5 alternations,
+    // 2026-12-07; `long_curly --split 0.05`: 1.05×), and `lean`, where more pairs are at rest
+    // relative to each other, was unchanged (1.00×).
     let (avp, avc, bvp, bvc) = (a.vp(), a.vc(), b.vp(), b.vc());
     ((avp - bvp).norm_squared() >= eps2)
-        | ((avp - bvc).norm_squared() >= eps2)
-        | ((avc - bvp).norm_squared() >= eps2)
-        | ((avc - bvc).norm_squared() >= eps2)
+        || ((avp - bvc).norm_squared() >= eps2)
+        || ((avc - bvp).norm_squared() >= eps2)
+        || ((avc - bvc).norm_squared() >= eps2)
 }
 
 /// The contact of a pair that passed [`near`] and [`moving`], if the cylinders intersect. `a`
