@@ -134,6 +134,30 @@
 //!   1.03× slower on 2026-12-07 (the whole `interactions long short --motion shake` process,
 //!   the two builds alternated eight times, after ÷ before wall 0.99–1.09): the compares
 //!   cost every visit, and the box read they spare was not waiting on memory.
+//! * **Where a tested pair's time goes, and five more tries that did not pay** (2026-12-07,
+//!   `examples/interactions.rs long short --motion shake`, one thread; "×" is the whole
+//!   process, before ÷ after wall, median of the builds alternated 4–6 times). Switching the
+//!   stages off one by one on `long` (the scene then has no hair–hair forces, so it is
+//!   denser: 3.0 M cell-pair candidates, 0.73 M box overlaps a step): about 2 ns a
+//!   candidate for the cell loop and its eight-entry filter, 7 ns a box overlap for the
+//!   adjacency and relative-motion tests, and the rest, about 29 ns a tested pair, for the
+//!   lanes, writing the contact with its loads and the response. Tried, not landed:
+//!   - segments numbered chain by chain (so that the entries of a cell that follow each
+//!     other are often one wisp's consecutive segments, side by side in memory): 0.93×;
+//!   - the grid holding pieces of four consecutive segments of one chain instead of
+//!     segments, each pair of overlapping pieces filtering its 4 × 4 segment pairs at once
+//!     (boxes, adjacency and relative motion without a branch): 0.81×. On `long` at 2 s a
+//!     step has 103 k pairs of pieces for 333 k tested pairs (pieces of two: 172 k): the
+//!     block filter moves the cost of the candidate loop, it does not remove it;
+//!   - the lanes computing two groups of four pairs side by side (two independent chains of
+//!     divisions): the lanes' share of the profile rose from 21 % to 31 % (sixteen
+//!     registers cannot hold both groups' segments);
+//!   - the lanes reading the velocities and masses only once the closest points are known:
+//!     0.96× (0.93–1.03);
+//!   - the first segment's velocities read once per entry instead of once per pair in the
+//!     candidate loop: 1.04× and 1.01× in two series, within the machine's noise.
+//!   What did pay: [`moving`] stopping at the first velocity difference that passes
+//!   (1.04–1.05× under `shake`, see there).
 //! * **No candidate pairs kept from step to step.** A list built once per frame and reused for
 //!   its four steps (temporal coherence, with a margin) would have to hold every pair that
 //!   comes within reach during the frame. Measured on 2026-12-07 with
