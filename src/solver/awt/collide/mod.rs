@@ -156,6 +156,7 @@
 //!     0.96× (0.93–1.03);
 //!   - the first segment's velocities read once per entry instead of once per pair in the
 //!     candidate loop: 1.04× and 1.01× in two series, within the machine's noise.
+//!
 //!   What did pay: [`moving`] stopping at the first velocity difference that passes
 //!   (1.04–1.05× under `shake`, see there).
 //! * **No candidate pairs kept from step to step.** A list built once per frame and reused for
