@@ -43,12 +43,12 @@ impl SegmentBox {
 }
 
 fn main() -> anyhow::Result<()> {
-    let args: Vec<String> = std::env::args().collect();
-    let (Some(style), Some(motion_name)) = (args.get(1), args.get(2)) else {
-        anyhow::bail!("usage: coherence_probe STYLE MOTION [SPLIT_THRESHOLD]");
-    };
-    let split: Option<f64> = args.get(3).map(|s| s.parse()).transpose()?;
-    let (_, mut sim) = common::awt_simulation(style, motion_name, split)?;
+    let common::ProbeArgs {
+        style,
+        motion: motion_name,
+        split,
+    } = common::probe_args("coherence_probe")?;
+    let (_, mut sim) = common::awt_simulation(&style, &motion_name, split)?;
     let mut report = StepReport::default();
     let spf = 4;
     let (mut frames, mut frames_with_events) = (0, 0);

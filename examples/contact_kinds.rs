@@ -20,12 +20,12 @@ use wisptree::report::StepReport;
 use wisptree::solver::common::closest_segment_params;
 
 fn main() -> anyhow::Result<()> {
-    let args: Vec<String> = std::env::args().collect();
-    let (Some(style), Some(motion_name)) = (args.get(1), args.get(2)) else {
-        anyhow::bail!("usage: contact_kinds STYLE MOTION [SPLIT_THRESHOLD]");
-    };
-    let split: Option<f64> = args.get(3).map(|s| s.parse()).transpose()?;
-    let (model, mut sim) = common::awt_simulation(style, motion_name, split)?;
+    let common::ProbeArgs {
+        style,
+        motion: motion_name,
+        split,
+    } = common::probe_args("contact_kinds")?;
+    let (model, mut sim) = common::awt_simulation(&style, &motion_name, split)?;
     let k = model.levels[0].rest_pos.len() / model.levels[0].gc_count();
     let mut report = StepReport::default();
     // [siblings, same tree, other trees]

@@ -1,5 +1,7 @@
 //! What the AWT probes among the examples share (not an example itself: Cargo builds only
-//! `examples/*.rs` and `examples/*/main.rs`).
+//! `examples/*.rs` and `examples/*/main.rs`). Each example compiles its own copy and uses
+//! part of it, hence the `allow`.
+#![allow(dead_code)]
 
 use std::path::Path;
 use std::sync::Arc;
@@ -8,6 +10,27 @@ use nalgebra::Point3;
 use wisptree::model::HairModel;
 use wisptree::motion::Motion;
 use wisptree::solver::awt::Simulation;
+
+/// The command line of a probe: `PROBE STYLE MOTION [SPLIT_THRESHOLD]`.
+pub struct ProbeArgs {
+    pub style: String,
+    pub motion: String,
+    pub split: Option<f64>,
+}
+
+/// Reads [`ProbeArgs`]; `probe` names the example in the usage message.
+pub fn probe_args(probe: &str) -> anyhow::Result<ProbeArgs> {
+    let args: Vec<String> = std::env::args().collect();
+    let (Some(style), Some(motion)) = (args.get(1), args.get(2)) else {
+        anyhow::bail!("usage: {probe} STYLE MOTION [SPLIT_THRESHOLD]");
+    };
+    let split = args.get(3).map(|s| s.parse()).transpose()?;
+    Ok(ProbeArgs {
+        style: style.clone(),
+        motion: motion.clone(),
+        split,
+    })
+}
 
 /// The AWT on the style file `styles/STYLE.ron` under the motion preset `motion`, at the
 /// style's split threshold or at `split`.
