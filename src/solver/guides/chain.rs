@@ -85,6 +85,13 @@ pub struct Chains {
     /// previous sub-step's `damp`. Links and contacts scale their whole force by the smallest
     /// factor of their vertices, so action and reaction stay equal. Explicit, the damping of
     /// the tens of contacts of a vertex in dense short hair overshoots and feeds a whip.
+    ///
+    /// Known weakness: the factor lags a sub-step, so a vertex meeting many contacts at once
+    /// gets their damping explicitly (`h C / m` above 10 for Short's 0.2 g vertices), which can
+    /// still overshoot and grow: Short under `jump` with `body_margin: 0.0030003` goes
+    /// non-finite after 5 s (2026-12-07). The factor from the sub-step's own damping (branch
+    /// `wip/guides-soft-now`) kept 32 such runs finite, but `chang-fig6`'s braid then leaks
+    /// (3 crossings with the whole force scaled, 1 with only damping and friction).
     pub soft: Vec<f64>,
     /// Largest joint rate reached by [`Chains::integrate`] since the last reset, rad/s (a
     /// diagnostic: nothing limits the rates).
