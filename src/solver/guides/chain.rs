@@ -89,9 +89,15 @@ pub struct Chains {
     /// Known weakness: the factor lags a sub-step, so a vertex meeting many contacts at once
     /// gets their damping explicitly (`h C / m` above 10 for Short's 0.2 g vertices), which can
     /// still overshoot and grow: Short under `jump` with `body_margin: 0.0030003` goes
-    /// non-finite after 5 s (2026-12-07). The factor from the sub-step's own damping (branch
-    /// `wip/guides-soft-now`) kept 32 such runs finite, but `chang-fig6`'s braid then leaks
-    /// (3 crossings with the whole force scaled, 1 with only damping and friction).
+    /// non-finite after 5 s (2026-12-07; 1 of 32 runs of Short and Short curly under `jump`
+    /// and `stop` at margins moved by 1e-10 to 3e-7 m). Tried, with the damping gathered
+    /// before any force is added: the factor from the sub-step's own damping (branch
+    /// `wip/guides-soft-now`) kept the 32 runs finite, but `chang-fig6`'s braid then leaks
+    /// (3 crossings with the whole force scaled, 1 with only damping and friction); the
+    /// lagged factor capped at `m / (h C)` with this sub-step's `C`, so that damping never
+    /// reverses a velocity (branch `wip/guides-damping-cap`), kept them finite and the Chang
+    /// experiments whole, but left a Long curly tip 2 mm inside the head under `shake`
+    /// (`tests/body_contact.rs` allows 1 mm).
     pub soft: Vec<f64>,
     /// Largest joint rate reached by [`Chains::integrate`] since the last reset, rad/s (a
     /// diagnostic: nothing limits the rates).

@@ -52,8 +52,9 @@ const MAX_TURN: f64 = 0.1;
 /// second). Stopping once no vertex is deeper than 1 µm within the 3 mm margin made Long's
 /// guides 20–25 % faster and the others 5–10 %, with kinetic energies as before, but the
 /// changed paths set off the whip that the lagging damping factor allows (see
-/// [`Chains::soft`]): Short under `stop` went non-finite at 2.9 s. On the branch
-/// `wip/guides-soft-now`, to land with a cure for the whip.
+/// [`Chains::soft`]): Short under `stop` went non-finite at 2.9 s, and with that factor
+/// capped, Short under `shake` at 5–6 s. On the branch `wip/guides-correction-residual`, to
+/// land once short hair's guides are robust.
 const CORRECTION_PASSES: usize = 8;
 
 /// Most pieces a guide's sub-step is split into. At one 10 ms sub-step per step the whipped
