@@ -67,6 +67,13 @@ const CORRECTION_PASSES: usize = 8;
 /// day), but Short and Short curly under `shake` went non-finite within 4 s, and the kinetic
 /// energy at 4 s rose on every style that stayed finite (1.1–1.2× under `shake`, 1.3–2.7×
 /// under `jump`).
+///
+/// Where the cap is reached, a whip can run away (2026-12-07, Short under `shake` on the
+/// branch `wip/guides-correction-residual`, traced step by step): one guide's fastest joint
+/// went 1,300 → 2,600 → 7,000 rad/s in three steps (a piece of `h / 128` then turns it by
+/// more than `MAX_TURN`) and the guide went non-finite, while its vertices' damping factors
+/// were 0.2–0.3. That whip is the split integration's, not the contacts' damping (see
+/// `Chains::soft`), and it is what stops the body correction's residual from landing.
 const MAX_SPLIT: f64 = 128.0;
 
 /// Marks "no guide".
