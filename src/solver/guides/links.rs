@@ -46,6 +46,10 @@ pub struct Links {
     pub broken: Vec<bool>,
     /// Stretch at the last force evaluation.
     pub stretch: Vec<f64>,
+    /// Per link, the force on its point per kilogram at the last [`Links::evaluate`], before
+    /// the mass and the implicit damping's factor (`Chains::soft`) of [`Links::add_forces`]
+    /// (zero if broken).
+    force: Vec<Vector3<f64>>,
 }
 
 impl Links {
@@ -155,13 +159,17 @@ impl Links {
         out
     }
 
-    /// Adds every intact link's spring and damping force to the chains' vertex forces, breaks
-    /// the links stretched to 2, and returns how many are intact. `strength` and `damping` are
-    /// per kilogram of the owner segment's vertex mass.
-    pub fn apply(&mut self, chains: &mut Chains, strength: f64, damping: f64) -> usize {
+    /// Evaluates every intact link's spring and damping force, breaks the links stretched to 2,
+    /// adds the damping coefficients of the intact ones to the chains' `damp`, and returns how
+    /// many are intact. `strength` and `damping` are per kilogram of the owner segment's vertex
+    /// mass. The forces wait for [`Links::add_forces`], once the sub-step's damping is all
+    /// known.
+    pub fn evaluate(&mut self, chains: &mut Chains, strength: f64, damping: f64) -> usize {
         let n = chains.n;
         let mut intact = 0;
+        self.force.resize(self.owner.len(), Vector3::zeros());
         for k in 0..self.owner.len() {
+            self.force[k] = Vector3::zeros();
             if self.broken[k] {
                 continue;
             }
@@ -185,18 +193,8 @@ impl Links {
             }
             intact += 1;
             let m = chains.m[l].min(chains.m[o]);
-            let soft = chains.soft[ov]
-                .min(chains.soft[ov + 1])
-                .min(chains.soft[v])
-                .min(chains.soft[v + 1]);
-            let f = -(d * (strength * stiffness_factor(s)) + (vp - va) * damping) * (m * soft);
-            // The point's share goes to its segment's ends; the reaction to the owner's ends,
-            // split by where the rest point projects on the owner segment.
-            chains.f[ov] += f * (1.0 - t);
-            chains.f[ov + 1] += f * t;
-            let ta = (self.p0[k].y / chains.len[l]).clamp(0.0, 1.0);
-            chains.f[v] -= f * (1.0 - ta);
-            chains.f[v + 1] -= f * ta;
+            self.force[k] = -(d * (strength * stiffness_factor(s)) + (vp - va) * damping);
+            let ta = self.owner_share(chains, k);
             let c = damping * m;
             chains.damp[ov] += c * (1.0 - t);
             chains.damp[ov + 1] += c * t;
@@ -204,6 +202,42 @@ impl Links {
             chains.damp[v + 1] += c * ta;
         }
         intact
+    }
+
+    /// Adds the forces of the last [`Links::evaluate`] to the chains' vertex forces, each
+    /// scaled by the smallest backward-Euler factor (`Chains::soft`) of the four vertices it
+    /// acts on, so that action and reaction stay equal.
+    pub fn add_forces(&self, chains: &mut Chains) {
+        let n = chains.n;
+        for (k, f) in self.force.iter().enumerate() {
+            if self.broken[k] {
+                continue;
+            }
+            let l = self.owner[k] as usize;
+            let o = self.other[k] as usize;
+            let v = (l / n) * (n + 1) + l % n;
+            let ov = (o / n) * (n + 1) + o % n;
+            let t = self.t[k];
+            let m = chains.m[l].min(chains.m[o]);
+            let soft = chains.soft[ov]
+                .min(chains.soft[ov + 1])
+                .min(chains.soft[v])
+                .min(chains.soft[v + 1]);
+            let f = f * (m * soft);
+            // The point's share goes to its segment's ends; the reaction to the owner's ends,
+            // split by where the rest point projects on the owner segment.
+            chains.f[ov] += f * (1.0 - t);
+            chains.f[ov + 1] += f * t;
+            let ta = self.owner_share(chains, k);
+            chains.f[v] -= f * (1.0 - ta);
+            chains.f[v + 1] -= f * ta;
+        }
+    }
+
+    /// Where link `k`'s rest point projects on its owner segment, in [0, 1]: the share of the
+    /// owner's second vertex.
+    fn owner_share(&self, chains: &Chains, k: usize) -> f64 {
+        (self.p0[k].y / chains.len[self.owner[k] as usize]).clamp(0.0, 1.0)
     }
 
     /// Current end points of link `k`: its rest place in the owner's frame, and the point.

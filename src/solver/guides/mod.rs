@@ -76,6 +76,12 @@ const CORRECTION_PASSES: usize = 8;
 /// `Chains::soft`), and it is what stops the body correction's residual from landing.
 const MAX_SPLIT: f64 = 128.0;
 
+/// The link whose mass vertex `v` of guide `g` carries (`n` segments per guide): the link
+/// ending at it, and link 0 for the root.
+fn link_at(g: usize, v: usize, n: usize) -> usize {
+    g * n + (v % (n + 1)).saturating_sub(1).min(n - 1)
+}
+
 /// Marks "no guide".
 pub const NO_GUIDE: u32 = u32::MAX;
 
@@ -501,21 +507,24 @@ impl GuideSolver {
             self.motion.pose(t)
         };
         self.posed_spheres(&pose1, t + h);
+        // Backward Euler on the damping of every force (see `Chains::soft`), with its factor
+        // from the sub-step before, capped by this sub-step's damping: the damping
+        // coefficients of the forces are gathered first (air drag, links, contacts), then each
+        // vertex's factor is set, and only then are the forces added, each scaled by it.
         let n = self.gp.segments;
         let drag = self.params.air_drag;
         for &g in &self.alive {
             for v in self.chains.verts(g) {
-                let l = g * n + (v % (n + 1)).saturating_sub(1).min(n - 1);
-                let wind = crate::solver::common::wind_at(&self.params, &self.chains.x[v], t);
+                let l = link_at(g, v, n);
                 let c = drag * self.chains.m[l];
-                let soft = 1.0 / (1.0 + h * (self.chains.damp[v] + c) / self.chains.m[l]);
-                self.chains.soft[v] = soft;
-                self.chains.f[v] = (wind - self.chains.v[v]) * (c * soft);
+                self.chains.soft[v] =
+                    1.0 / (1.0 + h * (self.chains.damp[v] + c) / self.chains.m[l]);
                 self.chains.damp[v] = c;
             }
         }
-        if !self.settling && self.gp.link_strength > 0.0 {
-            self.links.apply(
+        let linked = !self.settling && self.gp.link_strength > 0.0;
+        if linked {
+            self.links.evaluate(
                 &mut self.chains,
                 self.gp.link_strength,
                 self.gp.link_damping,
@@ -527,7 +536,7 @@ impl GuideSolver {
             self.since_search = self.since_search.saturating_add(1);
             if self.since_search >= self.gp.contact_search_every {
                 self.since_search = 0;
-                self.strips.detect_apply_on(
+                self.strips.detect_evaluate_on(
                     self.pool.as_ref(),
                     &mut self.chains,
                     &self.alive,
@@ -535,14 +544,30 @@ impl GuideSolver {
                 )
             } else {
                 self.strips
-                    .reapply_on(self.pool.as_ref(), &mut self.chains, &self.gp)
+                    .reevaluate_on(self.pool.as_ref(), &mut self.chains, &self.gp)
             }
         } else if self.gp.collision {
             self.strips
-                .apply_on(self.pool.as_ref(), &mut self.chains, &self.gp)
+                .evaluate_on(self.pool.as_ref(), &mut self.chains, &self.gp)
         } else {
             0
         };
+        for &g in &self.alive {
+            for v in self.chains.verts(g) {
+                let l = link_at(g, v, n);
+                let m = self.chains.m[l];
+                let soft = self.chains.soft[v].min(m / (h * self.chains.damp[v]));
+                self.chains.soft[v] = soft;
+                let wind = crate::solver::common::wind_at(&self.params, &self.chains.x[v], t);
+                self.chains.f[v] = (wind - self.chains.v[v]) * (drag * m * soft);
+            }
+        }
+        if linked {
+            self.links.add_forces(&mut self.chains);
+        }
+        if self.gp.collision {
+            self.strips.add_forces(&mut self.chains);
+        }
         let sub = advance::SubStep {
             motion: &self.motion,
             gravity: Vector3::from(self.params.gravity),

@@ -74,7 +74,7 @@ impl Solver for GuideSolver {
             // Candidates within twice the contact distance cover the hair's motion over the
             // step's later sub-steps. With one sub-step the contacts are evaluated on the very
             // positions searched, so the sub-step searches and evaluates at once, within the
-            // contact distance itself (`Strips::detect_apply_on`).
+            // contact distance itself (`Strips::detect_evaluate_on`).
             if sub > 1 {
                 self.strips.detect_on(
                     self.pool.as_ref(),

@@ -5,16 +5,23 @@ use super::*;
 use crate::simd::dispatch::multiversion;
 
 impl Strips {
-    /// Adds the contact forces of the candidates closer than `p.contact_distance` to the
-    /// chains' vertex forces; returns how many are in contact. On the calling thread.
-    pub fn apply(&mut self, chains: &mut Chains, p: &GuideParams) -> usize {
-        self.apply_on(None, chains, p)
+    /// Evaluates the contacts of the candidates closer than `p.contact_distance` and adds their
+    /// damping coefficients to the chains' `damp`; returns how many are in contact. Their
+    /// forces wait for [`Strips::add_forces`], once the sub-step's damping is all known. On
+    /// the calling thread.
+    pub fn evaluate(&mut self, chains: &mut Chains, p: &GuideParams) -> usize {
+        self.evaluate_on(None, chains, p)
     }
 
-    /// [`Strips::apply`] on the threads of `pool` (the same forces, added in the same order).
+    /// [`Strips::evaluate`] on the threads of `pool` (the same contacts, in the same order).
     /// Each candidate is first rejected cheaply when a bound on its distance (the triangle's
     /// box, then its prism; the segments' bounding spheres) is already past the threshold.
-    pub fn apply_on(&mut self, pool: Option<&Pool>, chains: &mut Chains, p: &GuideParams) -> usize {
+    pub fn evaluate_on(
+        &mut self,
+        pool: Option<&Pool>,
+        chains: &mut Chains,
+        p: &GuideParams,
+    ) -> usize {
         if self.chunks.len() != CHUNKS {
             self.chunks = (0..CHUNKS).map(|_| Mutex::default()).collect();
         }
@@ -22,7 +29,7 @@ impl Strips {
     }
 
     /// Runs `piece` on each of the [`CHUNKS`] pieces (on the threads of `pool`), with the
-    /// tangents refreshed first, then adds their forces in piece order; returns the contacts.
+    /// tangents refreshed first, then adds their damping in piece order; returns the contacts.
     fn pieces_on(
         &mut self,
         pool: Option<&Pool>,
@@ -38,16 +45,16 @@ impl Strips {
             let mut guard = this.chunks[c].lock().unwrap_or_else(|e| e.into_inner());
             piece(level, this, c, ch, p, &mut guard);
         });
-        self.add_forces(chains)
+        self.add_damping(chains)
     }
 
     /// The broad phase and the contacts of a step of one sub-step at once: the candidates are
     /// searched within the contact distance (with a rounding slack) on the very positions the
     /// contacts are evaluated on, so each piece evaluates its candidates as it finds them
-    /// instead of listing them for [`Strips::apply_on`]: the same contacts, their forces added
-    /// in the same order, bit for bit, as [`Strips::detect_on`] then [`Strips::apply_on`]
-    /// with that reach. Returns how many are in contact.
-    pub fn detect_apply_on(
+    /// instead of listing them for [`Strips::evaluate_on`]: the same contacts in the same
+    /// order, bit for bit, as [`Strips::detect_on`] then [`Strips::evaluate_on`] with that
+    /// reach. Adds their damping; returns how many are in contact.
+    pub fn detect_evaluate_on(
         &mut self,
         pool: Option<&Pool>,
         chains: &mut Chains,
@@ -77,10 +84,10 @@ impl Strips {
                 chunk.vt.len() + chunk.seg.len()
             })
             .sum();
-        self.add_forces(chains)
+        self.add_damping(chains)
     }
 
-    /// The contacts of the last search ([`Strips::detect_apply_on`]), evaluated again on the
+    /// The contacts of the last search ([`Strips::detect_evaluate_on`]), evaluated again on the
     /// chains' current positions and velocities without a search: each piece takes the pairs
     /// it found in contact last time (a triangle's vertices, a pair of links) and keeps those
     /// still within the contact distance, with forces from the current state, in the same
@@ -88,9 +95,9 @@ impl Strips {
     /// elements no longer cross by `MIN_CROSSING`, which the search asks of a new pair, keeps
     /// its contact until then); a pair whose triangle was rebuilt away ([`Strips::rebuild`]
     /// carries the others over) or whose guide was removed is dropped, and a broken triangle is
-    /// skipped as the search skips it. Before any search there is nothing to evaluate. Returns
-    /// how many are in contact.
-    pub fn reapply_on(
+    /// skipped as the search skips it. Before any search there is nothing to evaluate. Adds
+    /// their damping; returns how many are in contact.
+    pub fn reevaluate_on(
         &mut self,
         pool: Option<&Pool>,
         chains: &mut Chains,
@@ -102,20 +109,18 @@ impl Strips {
         self.pieces_on(pool, chains, p, reapply_piece)
     }
 
-    /// Adds the pieces' contact forces to the chains' vertex forces, contact by contact in the
-    /// order of one thread: the triangles' vertices, then the segments'. Returns the contacts.
-    fn add_forces(&self, chains: &mut Chains) -> usize {
-        // The forces, contact by contact in the order of one thread: the triangles' vertices,
-        // then the segments'.
+    /// Adds the damping coefficients of the pieces' contacts to the chains' `damp`, contact by
+    /// contact in the order of one thread: the triangles' vertices, then the segments'.
+    /// Returns the contacts.
+    fn add_damping(&self, chains: &mut Chains) -> usize {
         let mut count = 0;
+        // A triangle's share is summed over its contacts, then added to its vertices.
         let mut cur = u32::MAX;
-        let mut tf = [Vector3::zeros(); 3];
         let mut td = [0.0; 3];
-        let flush = |chains: &mut Chains, t: u32, tf: &[Vector3<f64>; 3], td: &[f64; 3]| {
+        let flush = |chains: &mut Chains, t: u32, td: &[f64; 3]| {
             if t != u32::MAX {
                 let tv = self.tri[t as usize];
                 for k in 0..3 {
-                    chains.f[tv[k] as usize] += tf[k];
                     chains.damp[tv[k] as usize] += td[k];
                 }
             }
@@ -125,36 +130,21 @@ impl Strips {
             count += chunk.count;
             for hit in &chunk.tri_hits {
                 if hit.t != cur {
-                    flush(chains, cur, &tf, &td);
+                    flush(chains, cur, &td);
                     cur = hit.t;
-                    tf = [Vector3::zeros(); 3];
                     td = [0.0; 3];
                 }
-                let v = hit.v as usize;
-                chains.f[v] += hit.f;
-                chains.damp[v] += hit.cd;
+                chains.damp[hit.v as usize] += hit.cd;
                 for k in 0..3 {
-                    tf[k] -= hit.f * hit.bary[k];
                     td[k] += hit.cd * hit.bary[k];
                 }
             }
         }
-        flush(chains, cur, &tf, &td);
+        flush(chains, cur, &td);
         for m in &self.chunks {
             let chunk = m.lock().unwrap_or_else(|e| e.into_inner());
             for hit in &chunk.seg_hits {
-                let (va, vb, s, t, f, cd) = (
-                    hit.va as usize,
-                    hit.vb as usize,
-                    hit.s,
-                    hit.t,
-                    hit.f,
-                    hit.cd,
-                );
-                chains.f[va] += f * (1.0 - s);
-                chains.f[va + 1] += f * s;
-                chains.f[vb] -= f * (1.0 - t);
-                chains.f[vb + 1] -= f * t;
+                let (va, vb, s, t, cd) = (hit.va as usize, hit.vb as usize, hit.s, hit.t, hit.cd);
                 chains.damp[va] += cd * (1.0 - s);
                 chains.damp[va + 1] += cd * s;
                 chains.damp[vb] += cd * (1.0 - t);
@@ -162,6 +152,60 @@ impl Strips {
             }
         }
         count
+    }
+
+    /// Adds the forces of the contacts last evaluated to the chains' vertex forces, each
+    /// scaled by the smallest backward-Euler factor (`Chains::soft`, from this sub-step's
+    /// damping) of the vertices it acts on, so that action and reaction stay equal; contact by
+    /// contact in the order of one thread: the triangles' vertices, then the segments'.
+    pub fn add_forces(&self, chains: &mut Chains) {
+        let mut cur = u32::MAX;
+        let mut tf = [Vector3::zeros(); 3];
+        let flush = |chains: &mut Chains, t: u32, tf: &[Vector3<f64>; 3]| {
+            if t != u32::MAX {
+                let tv = self.tri[t as usize];
+                for k in 0..3 {
+                    chains.f[tv[k] as usize] += tf[k];
+                }
+            }
+        };
+        for m in &self.chunks {
+            let chunk = m.lock().unwrap_or_else(|e| e.into_inner());
+            for hit in &chunk.tri_hits {
+                let tv = self.tri[hit.t as usize].map(|w| w as usize);
+                if hit.t != cur {
+                    flush(chains, cur, &tf);
+                    cur = hit.t;
+                    tf = [Vector3::zeros(); 3];
+                }
+                let v = hit.v as usize;
+                let soft = chains.soft[v]
+                    .min(chains.soft[tv[0]])
+                    .min(chains.soft[tv[1]])
+                    .min(chains.soft[tv[2]]);
+                let f = hit.f * soft;
+                chains.f[v] += f;
+                for k in 0..3 {
+                    tf[k] -= f * hit.bary[k];
+                }
+            }
+        }
+        flush(chains, cur, &tf);
+        for m in &self.chunks {
+            let chunk = m.lock().unwrap_or_else(|e| e.into_inner());
+            for hit in &chunk.seg_hits {
+                let (va, vb, s, t) = (hit.va as usize, hit.vb as usize, hit.s, hit.t);
+                let soft = chains.soft[va]
+                    .min(chains.soft[va + 1])
+                    .min(chains.soft[vb])
+                    .min(chains.soft[vb + 1]);
+                let f = hit.f * soft;
+                chains.f[va] += f * (1.0 - s);
+                chains.f[va + 1] += f * s;
+                chains.f[vb] -= f * (1.0 - t);
+                chains.f[vb + 1] -= f * t;
+            }
+        }
     }
 
     /// Piece `c` of a sub-step's vertex–triangle contacts: the triangles holding its share of
@@ -209,9 +253,6 @@ impl Strips {
         let pre = TrianglePre::new(&tp);
         let tt = tv.map(|w| tangents[w]);
         let tvel = tv.map(|w| chains.v[w]);
-        let tsoft = chains.soft[tv[0]]
-            .min(chains.soft[tv[1]])
-            .min(chains.soft[tv[2]]);
         // The box and prism bounds of up to 32 vertices at a time without a branch (a bit
         // mask: about half the candidates pass, which a branch per test mispredicts), then
         // the exact test and the force of those that pass, in the same order.
@@ -261,8 +302,7 @@ impl Strips {
                 }
                 let scale = orientation_scale(&hair, &dir.try_normalize(1e-12).unwrap_or(hair));
                 let m = chains.m[link_of(v, n)];
-                let soft = chains.soft[v].min(tsoft);
-                let f = contact_force(chains.v[v] - vt, nrm, d, scale, m, p) * soft;
+                let f = contact_force(chains.v[v] - vt, nrm, d, scale, m, p);
                 let cd = damping_of(scale, m, p);
                 out.tri_hits.push(TriHit {
                     t: t as u32,
@@ -338,11 +378,7 @@ impl Strips {
         let rel = chains.v[va].lerp(&chains.v[va + 1], s) - chains.v[vb].lerp(&chains.v[vb + 1], t);
         let m = chains.m[la].min(chains.m[lb]);
         let scale = orientation_scale(&ta, &tb);
-        let soft = chains.soft[va]
-            .min(chains.soft[va + 1])
-            .min(chains.soft[vb])
-            .min(chains.soft[vb + 1]);
-        let f = contact_force(rel, nrm, d, scale, m, p) * soft;
+        let f = contact_force(rel, nrm, d, scale, m, p);
         let cd = damping_of(scale, m, p);
         out.seg_hits.push(SegHit {
             va: va as u32,
@@ -356,7 +392,7 @@ impl Strips {
 }
 
 multiversion! {
-    /// Piece `c` of [`Strips::apply_on`], built for AVX2 too (see `crate::simd::dispatch`):
+    /// Piece `c` of [`Strips::evaluate_on`], built for AVX2 too (see `crate::simd::dispatch`):
     /// the same forces bit for bit, the scalar `f64` arithmetic in three-operand encoding and
     /// the bounds eight lanes wide.
     fn contacts_piece(
@@ -375,7 +411,7 @@ multiversion! {
 }
 
 multiversion! {
-    /// Piece `c` of [`Strips::detect_apply_on`], built for AVX2 too (see
+    /// Piece `c` of [`Strips::detect_evaluate_on`], built for AVX2 too (see
     /// `crate::simd::dispatch`): the search's box, crossing and prism tests eight at a time in
     /// `f32` in one register instead of two, the same candidates and forces bit for bit.
     #[allow(clippy::too_many_arguments)]
@@ -416,7 +452,7 @@ multiversion! {
 }
 
 multiversion! {
-    /// Piece `c` of [`Strips::reapply_on`]: the piece's contacts of the last search (their
+    /// Piece `c` of [`Strips::reevaluate_on`]: the piece's contacts of the last search (their
     /// triangles in order, each with its vertices in index order; then its pairs of links),
     /// evaluated again in the same order, those of removed guides and broken triangles left
     /// out.
@@ -474,7 +510,7 @@ pub(super) enum Bounds {
     /// Test them: candidates listed for a whole step, at a larger reach.
     Test,
     /// The search has just kept them within the contact distance, at these positions, or
-    /// they were in contact at the last evaluation ([`Strips::reapply_on`]): the exact test
+    /// they were in contact at the last evaluation ([`Strips::reevaluate_on`]): the exact test
     /// alone decides.
     Passed,
 }

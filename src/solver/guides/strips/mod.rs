@@ -13,10 +13,10 @@
 //! buffers; candidate pairs found within twice the threshold are re-evaluated at every
 //! sub-step. When a step has one sub-step, the search runs within the threshold itself on that
 //! sub-step's positions and each candidate is evaluated as it is found
-//! ([`Strips::detect_apply_on`]).
+//! ([`Strips::detect_evaluate_on`]).
 //!
 //! **A search every second step** (`guides.contact_search_every`, default 2). The paper does
-//! not say how often its strips are searched. Between searches, [`Strips::reapply_on`]
+//! not say how often its strips are searched. Between searches, [`Strips::reevaluate_on`]
 //! evaluates the pairs the last search found in contact again, on the current positions and
 //! velocities: a lasting contact (most of them: at rest, and within a moving wisp) gets the
 //! same forces as from a fresh search, bit for bit when nothing moved (tests), and only a pair
@@ -164,7 +164,9 @@ pub fn strip_pairs(
 /// thread finding the other core busy takes the pieces the other would have.
 pub const CHUNKS: usize = 8;
 
-/// A vertex–triangle contact of a sub-step, kept until its forces are added in order.
+/// A vertex–triangle contact of a sub-step, kept until its forces are added in order: the
+/// triangle, the vertex, the force on the vertex before the implicit damping's factor
+/// (`Chains::soft`), the damping coefficient and the closest point's barycentric weights.
 #[derive(Debug, Clone, Copy)]
 struct TriHit {
     t: u32,
@@ -175,7 +177,8 @@ struct TriHit {
 }
 
 /// A segment–segment contact of a sub-step: the first vertices of both links, the closest
-/// points' parameters, the force on the first link and the damping coefficient.
+/// points' parameters, the force on the first link before the implicit damping's factor
+/// (`Chains::soft`) and the damping coefficient.
 #[derive(Debug, Clone, Copy)]
 struct SegHit {
     va: u32,
@@ -362,7 +365,7 @@ impl Strips {
     /// After a rebuild from `old_pairs`: the last contacts' triangles renumbered to the new
     /// strips (a strip's triangles are numbered `2·n` per strip in strip order, so a triangle
     /// keeps its place within its strip), and those of strips that are gone dropped, so that
-    /// [`Strips::reapply_on`] and the inspector read the triangles in force.
+    /// [`Strips::reevaluate_on`] and the inspector read the triangles in force.
     fn carry_hits_over(&mut self, old_pairs: &[(u32, u32)], n: usize) {
         let per_strip = 2 * n as u32;
         let RebuildScratch {

@@ -52,6 +52,33 @@ fn contact_params() -> GuideParams {
     }
 }
 
+/// [`Strips::evaluate_on`], then its forces added (`c`'s factors `soft` as they are).
+fn eval(s: &mut Strips, pool: Option<&Pool>, c: &mut Chains, p: &GuideParams) -> usize {
+    let n = s.evaluate_on(pool, c, p);
+    s.add_forces(c);
+    n
+}
+
+/// [`Strips::detect_evaluate_on`], then its forces added.
+fn detect_eval(
+    s: &mut Strips,
+    pool: Option<&Pool>,
+    c: &mut Chains,
+    alive: &[usize],
+    p: &GuideParams,
+) -> usize {
+    let n = s.detect_evaluate_on(pool, c, alive, p);
+    s.add_forces(c);
+    n
+}
+
+/// [`Strips::reevaluate_on`], then its forces added.
+fn reeval(s: &mut Strips, pool: Option<&Pool>, c: &mut Chains, p: &GuideParams) -> usize {
+    let n = s.reevaluate_on(pool, c, p);
+    s.add_forces(c);
+    n
+}
+
 /// Forces and damping of `c`, bit for bit.
 fn force_bits(c: &Chains) -> Vec<u64> {
     c.f.iter()
@@ -237,8 +264,8 @@ fn two_threads_give_the_same_candidates_and_forces() {
         assert_eq!(one.tri_start, two.tri_start);
         assert_eq!(one.tri_verts, two.tri_verts);
         let (mut ca, mut cb) = (c.clone(), c.clone());
-        let na = one.apply_on(None, &mut ca, &p);
-        let nb = two.apply_on(Some(&pool), &mut cb, &p);
+        let na = eval(&mut one, None, &mut ca, &p);
+        let nb = eval(&mut two, Some(&pool), &mut cb, &p);
         assert_eq!(na, nb);
         assert!(na > 10, "seed {seed}: {na} contacts");
         assert_eq!(force_bits(&ca), force_bits(&cb), "seed {seed}");
@@ -257,12 +284,12 @@ fn searching_while_evaluating_gives_the_same_forces() {
         let alive: Vec<usize> = (0..16).collect();
         listed.detect_on(None, &c, &alive, p.contact_distance * (1.0 + 1e-6));
         let mut ca = c.clone();
-        let na = listed.apply_on(None, &mut ca, &p);
+        let na = eval(&mut listed, None, &mut ca, &p);
         assert!(na > 10, "seed {seed}: {na} contacts");
         for pool in [None, Some(&pool)] {
             let (_, mut fused) = tangle(seed, 16, 8);
             let mut cb = c.clone();
-            let nb = fused.detect_apply_on(pool, &mut cb, &alive, &p);
+            let nb = detect_eval(&mut fused, pool, &mut cb, &alive, &p);
             assert_eq!(na, nb, "seed {seed}");
             assert_eq!(listed.candidates(), fused.candidates(), "seed {seed}");
             assert_eq!(force_bits(&ca), force_bits(&cb), "seed {seed}");
@@ -283,10 +310,10 @@ fn the_avx2_build_of_the_pieces_matches_the_portable_one_bit_for_bit() {
         s.simd_level = Some(level);
         let mut forces = c.clone();
         let contacts = if fused {
-            s.detect_apply_on(None, &mut forces, &alive, &p)
+            detect_eval(&mut s, None, &mut forces, &alive, &p)
         } else {
             s.detect_on(None, &c, &alive, 2.0 * p.contact_distance);
-            s.apply_on(None, &mut forces, &p)
+            eval(&mut s, None, &mut forces, &p)
         };
         (
             contacts,
@@ -332,14 +359,14 @@ fn the_last_contacts_evaluated_again_are_the_searched_ones() {
         for pool in [None, Some(&pool)] {
             let (c, mut s) = tangle(seed, 16, 8);
             let mut searched = c.clone();
-            let found = s.detect_apply_on(pool, &mut searched, &alive, &p);
+            let found = detect_eval(&mut s, pool, &mut searched, &alive, &p);
             assert!(found > 10, "seed {seed}: {found} contacts");
             let mut again = c.clone();
-            assert_eq!(s.reapply_on(pool, &mut again, &p), found, "seed {seed}");
+            assert_eq!(reeval(&mut s, pool, &mut again, &p), found, "seed {seed}");
             assert_eq!(force_bits(&searched), force_bits(&again), "seed {seed}");
             // Twice in a row: the pairs are carried from evaluation to evaluation.
             let mut third = c.clone();
-            assert_eq!(s.reapply_on(pool, &mut third, &p), found, "seed {seed}");
+            assert_eq!(reeval(&mut s, pool, &mut third, &p), found, "seed {seed}");
             assert_eq!(force_bits(&searched), force_bits(&third), "seed {seed}");
             // Every vertex of guide 3 flown far away: its contacts are gone.
             let mut moved = c.clone();
@@ -348,8 +375,8 @@ fn the_last_contacts_evaluated_again_are_the_searched_ones() {
             }
             let mut fresh = moved.clone();
             let (_, mut s2) = tangle(seed, 16, 8);
-            let want = s2.detect_apply_on(None, &mut fresh, &alive, &p);
-            let got = s.reapply_on(pool, &mut moved, &p);
+            let want = detect_eval(&mut s2, None, &mut fresh, &alive, &p);
+            let got = reeval(&mut s, pool, &mut moved, &p);
             assert!(got < found, "seed {seed}: {got} of {found} contacts left");
             assert!(
                 got >= want,
@@ -365,7 +392,7 @@ fn fresh_search(seed: u64, pairs: &[(u32, u32)], c: &Chains, alive: &[usize]) ->
     let (_, mut s) = tangle(seed, 16, 8);
     s.rebuild(8, pairs, &c.x.clone(), 0.001);
     let mut forces = c.clone();
-    let found = s.detect_apply_on(None, &mut forces, alive, &p);
+    let found = detect_eval(&mut s, None, &mut forces, alive, &p);
     (found, force_bits(&forces))
 }
 
@@ -380,13 +407,13 @@ fn a_rebuild_carries_the_last_contacts_over() {
         let (c, mut s) = tangle(seed, 16, n);
         let alive: Vec<usize> = (0..16).collect();
         let mut first = c.clone();
-        s.detect_apply_on(None, &mut first, &alive, &p);
+        detect_eval(&mut s, None, &mut first, &alive, &p);
         // Strip (4, 5) gone: the later strips move down by 2·n triangles.
         let pairs: Vec<(u32, u32)> = (1..16u32).filter(|&g| g != 5).map(|g| (g - 1, g)).collect();
         s.rebuild(n, &pairs, &c.x.clone(), 0.001);
         let (nw, want) = fresh_search(seed, &pairs, &c, &alive);
         let mut got = c.clone();
-        assert_eq!(s.reapply_on(None, &mut got, &p), nw, "seed {seed}");
+        assert_eq!(reeval(&mut s, None, &mut got, &p), nw, "seed {seed}");
         assert_eq!(want, force_bits(&got), "seed {seed}");
         // Guide 15 removed (its strip too): none of its contacts is evaluated again.
         let mut c2 = c.clone();
@@ -396,7 +423,7 @@ fn a_rebuild_carries_the_last_contacts_over() {
         s.rebuild(n, &pairs2, &c.x.clone(), 0.001);
         let (nw2, want2) = fresh_search(seed, &pairs2, &c2, &alive2);
         let mut got2 = c2.clone();
-        assert_eq!(s.reapply_on(None, &mut got2, &p), nw2, "seed {seed}");
+        assert_eq!(reeval(&mut s, None, &mut got2, &p), nw2, "seed {seed}");
         assert_eq!(want2, force_bits(&got2), "seed {seed}");
     }
 }
