@@ -811,3 +811,34 @@ fn short_hair_stays_finite_when_contacts_come_all_at_once() {
         }
     }
 }
+
+/// The body correction's later passes run only while a vertex lies deeper than a residual
+/// within the margin (`guides::body::any_deeper`): a vertex 2 µm within the 3 mm margin of a
+/// sphere asks for another pass at a residual of 1 µm, one 0.5 µm within does not, and
+/// neither does a root, however deep.
+#[test]
+fn another_correction_pass_only_for_a_vertex_deeper_than_the_residual() {
+    use wisptree::motion::Pose;
+    use wisptree::solver::guides::body::{any_deeper, PosedSphere, Shapes};
+    let sphere = PosedSphere {
+        center: Vector3::zeros(),
+        radius: 0.1,
+        velocity: Vector3::zeros(),
+        spin: Vector3::zeros(),
+    };
+    let shapes = Shapes {
+        colliders: &[],
+        pose: Pose::identity(),
+    };
+    let (margin, residual) = (0.003, 1e-6);
+    let at = |within: f64| Vector3::new(0.0, 0.1 + margin - within, 0.0);
+    let far = Vector3::new(0.0, 0.5, 0.0);
+    let deeper = |x: &[Vector3<f64>]| any_deeper(x, &[sphere], &shapes, margin, residual);
+    assert!(deeper(&[far, at(2e-6), far]));
+    assert!(!deeper(&[far, at(0.5e-6), far]));
+    assert!(!deeper(&[at(0.05), far, far]), "the root is not corrected");
+    assert!(
+        deeper(&[far, far, at(0.05)]),
+        "a vertex inside the body itself"
+    );
+}

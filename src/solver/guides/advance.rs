@@ -13,7 +13,7 @@ use nalgebra::{Point3, Vector3, Vector6};
 
 use super::body::{self, PosedSphere};
 use super::chain::{Base, ChainRun, Chains};
-use super::{spatial_velocity, CORRECTION_PASSES, MAX_SPLIT, MAX_TURN};
+use super::{spatial_velocity, CORRECTION_PASSES, CORRECTION_RESIDUAL, MAX_SPLIT, MAX_TURN};
 use crate::motion::{Motion, Pose};
 use crate::par::{for_each_on, Pool};
 use crate::simd::dispatch::multiversion;
@@ -200,6 +200,9 @@ fn advance_guide(run: &mut ChainRun, g: usize, s: &SubStep, buf: &mut RunBuffers
     let mut pushed = 0;
     for pass in 0..CORRECTION_PASSES {
         let (x, v) = run.vertices(g);
+        if pass > 0 && !body::any_deeper(x, s.spheres, &s.shapes, s.margin, CORRECTION_RESIDUAL) {
+            break;
+        }
         buf.x.copy_from_slice(x);
         buf.v.copy_from_slice(v);
         let p = body::correct(

@@ -66,6 +66,21 @@ pub fn inside(spheres: &[PosedSphere], x: &Vector3<f64>, margin: f64) -> Option<
     best.map(|(_, k)| k)
 }
 
+/// Whether a vertex of `x` after the root lies deeper than `depth` within the body's `margin`
+/// (`depth` ≤ `margin`): whether another pass of [`correct`] is worth its cost.
+pub fn any_deeper(
+    x: &[Vector3<f64>],
+    spheres: &[PosedSphere],
+    shapes: &Shapes,
+    margin: f64,
+    depth: f64,
+) -> bool {
+    let m = margin - depth;
+    x.iter()
+        .skip(1)
+        .any(|p| inside(spheres, p, m).is_some() || shapes.within(p, m))
+}
+
 /// Corrects one guide's vertices `x` (root first, `lens[i]` the length of segment `i`) and
 /// their velocities `v` in place. A pushed-out vertex keeps its velocity relative to the body only where it
 /// leaves the body (the normal part, if outwards) and loses the fraction `friction` of its

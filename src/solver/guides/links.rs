@@ -173,10 +173,7 @@ impl Links {
             if self.broken[k] {
                 continue;
             }
-            let l = self.owner[k] as usize;
-            let o = self.other[k] as usize;
-            let v = (l / n) * (n + 1) + l % n;
-            let ov = (o / n) * (n + 1) + o % n;
+            let (l, o, v, ov) = self.segments(n, k);
             let t = self.t[k];
             let p = chains.x[ov] + (chains.x[ov + 1] - chains.x[ov]) * t;
             let vp = chains.v[ov] + (chains.v[ov + 1] - chains.v[ov]) * t;
@@ -213,10 +210,7 @@ impl Links {
             if self.broken[k] {
                 continue;
             }
-            let l = self.owner[k] as usize;
-            let o = self.other[k] as usize;
-            let v = (l / n) * (n + 1) + l % n;
-            let ov = (o / n) * (n + 1) + o % n;
+            let (l, o, v, ov) = self.segments(n, k);
             let t = self.t[k];
             let m = chains.m[l].min(chains.m[o]);
             let soft = chains.soft[ov]
@@ -234,6 +228,13 @@ impl Links {
         }
     }
 
+    /// Link `k`'s owner segment and linked segment (`g · n + i`, `n` segments per guide), and
+    /// their first vertices (`g · (n + 1) + i`).
+    fn segments(&self, n: usize, k: usize) -> (usize, usize, usize, usize) {
+        let (l, o) = (self.owner[k] as usize, self.other[k] as usize);
+        (l, o, (l / n) * (n + 1) + l % n, (o / n) * (n + 1) + o % n)
+    }
+
     /// Where link `k`'s rest point projects on its owner segment, in [0, 1]: the share of the
     /// owner's second vertex.
     fn owner_share(&self, chains: &Chains, k: usize) -> f64 {
@@ -242,11 +243,7 @@ impl Links {
 
     /// Current end points of link `k`: its rest place in the owner's frame, and the point.
     pub fn ends(&self, chains: &Chains, k: usize) -> (Vector3<f64>, Vector3<f64>) {
-        let n = chains.n;
-        let l = self.owner[k] as usize;
-        let o = self.other[k] as usize;
-        let v = (l / n) * (n + 1) + l % n;
-        let ov = (o / n) * (n + 1) + o % n;
+        let (l, _, v, ov) = self.segments(chains.n, k);
         let p = chains.x[ov] + (chains.x[ov + 1] - chains.x[ov]) * self.t[k];
         (chains.x[v] + chains.rot[l] * self.p0[k], p)
     }

@@ -44,18 +44,21 @@ const MAX_TURN: f64 = 0.1;
 /// node of Long curly under `shake` 5 mm inside the head at one 10 ms sub-step per step; the
 /// passes stop as soon as one pushes nothing.
 ///
-/// Most sub-steps resting on the body never get there (2026-12-07, counted in a throwaway
+/// Most sub-steps resting on the body never got there (2026-12-07, counted in a throwaway
 /// build, `examples/layered_probe long_curly stop 3 guides`): 60 % of the guides' sub-steps
-/// run all eight passes, because the joints give back positions 1e-9 to 1e-4 m within the
+/// ran all eight passes, because the joints give back positions 1e-9 to 1e-4 m within the
 /// margin (rounding, and the crease of two spheres that six rounds leave a little inside),
 /// and the passes cost more than the integration (545 against 157 ms of CPU per simulated
-/// second). Stopping once no vertex is deeper than 1 µm within the 3 mm margin made Long's
-/// guides 20–25 % faster and the others 5–10 %, with kinetic energies as before, but the
-/// changed paths set off the whip that the lagging damping factor allows (see
-/// [`Chains::soft`]): Short under `stop` went non-finite at 2.9 s, and with that factor
-/// capped, Short under `shake` at 5–6 s. On the branch `wip/guides-correction-residual`, to
-/// land once short hair's guides are robust.
+/// second). So a pass after the first runs only while a vertex is deeper than
+/// [`CORRECTION_RESIDUAL`] within the margin. That changes the paths, which found the
+/// guides' two whips: the lagging damping factor's (now capped, see [`Chains::soft`]) and a
+/// tip joint outrunning the split integration (see [`MAX_SPLIT`]).
 const CORRECTION_PASSES: usize = 8;
+
+/// How deep within the body's margin (3 mm by default) a vertex may stay after the first
+/// pass of the body correction without another, m: 1 µm, about a hundredth of a hair's width
+/// and never inside the body itself. The first pass (the one with friction, §3.3) always runs.
+const CORRECTION_RESIDUAL: f64 = 1e-6;
 
 /// Most pieces a guide's sub-step is split into. At one 10 ms sub-step per step the whipped
 /// tips of short hair under `shake` need pieces of about 0.1 ms (32 pieces left short hair's
@@ -68,13 +71,14 @@ const CORRECTION_PASSES: usize = 8;
 /// energy at 4 s rose on every style that stayed finite (1.1–1.2× under `shake`, 1.3–2.7×
 /// under `jump`).
 ///
-/// Where the cap is reached, a whip can run away (2026-12-07, Short under `shake` on the
-/// branch `wip/guides-correction-residual`, traced step by step): one guide's fastest joint
-/// went 1,300 → 2,600 → 7,000 rad/s in three steps (a piece of `h / 128` then turns it by
-/// more than `MAX_TURN`) and the guide went non-finite, while its vertices' damping factors
-/// were 0.2–0.3. That whip is the split integration's, not the contacts' damping (see
-/// `Chains::soft`), and it is what stops the body correction's residual from landing.
-const MAX_SPLIT: f64 = 128.0;
+/// Where 128 pieces were the cap, a whip could run away (2026-12-07, Short under `shake`
+/// with [`CORRECTION_RESIDUAL`], traced step by step): one guide's fastest joint went 1,300 →
+/// 2,600 → 7,000 rad/s in three steps (a piece of `h / 128` then turns it by more than
+/// `MAX_TURN`, where the explicit velocity-product terms add energy), and the guide went
+/// non-finite while its vertices' damping factors were 0.2–0.3: the split integration's
+/// whip, not the contacts' damping. With 512 that run stays finite, and only the few guides
+/// whose joints turn that fast take the extra pieces.
+const MAX_SPLIT: f64 = 512.0;
 
 /// The link whose mass vertex `v` of guide `g` carries (`n` segments per guide): the link
 /// ending at it, and link 0 for the root.

@@ -135,8 +135,8 @@ impl Strips {
                     td = [0.0; 3];
                 }
                 chains.damp[hit.v as usize] += hit.cd;
-                for k in 0..3 {
-                    td[k] += hit.cd * hit.bary[k];
+                for (d, b) in td.iter_mut().zip(hit.bary) {
+                    *d += hit.cd * b;
                 }
             }
         }
@@ -185,8 +185,8 @@ impl Strips {
                     .min(chains.soft[tv[2]]);
                 let f = hit.f * soft;
                 chains.f[v] += f;
-                for k in 0..3 {
-                    tf[k] -= f * hit.bary[k];
+                for (t, b) in tf.iter_mut().zip(hit.bary) {
+                    *t -= f * b;
                 }
             }
         }
