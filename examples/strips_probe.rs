@@ -1,7 +1,7 @@
 //! Times the guide strips' search and contacts of one sub-step (Chang, Jin, Yu 2002, §4.2) on a
 //! frozen state: `strips_probe STYLE MOTION SECONDS [CALLS]` runs the guides for SECONDS, then
-//! calls `Strips::detect_evaluate_on` CALLS times on the same positions, on one thread (`THREADS=2`:
-//! on a pool of two), and prints the median milliseconds per call, the candidates and the
+//! calls `Strips::detect_evaluate_on` and `Strips::add_forces` CALLS times on the same
+//! positions, on one thread (`THREADS=2`: on a pool of two), and prints the median milliseconds per call, the candidates and the
 //! contacts. A fixed state makes before/after comparisons of the search steadier than a whole
 //! run's: every call finds the same candidates.
 use std::time::Instant;
@@ -43,6 +43,8 @@ fn main() -> anyhow::Result<()> {
     for _ in 0..calls {
         let t = Instant::now();
         contacts = strips.detect_evaluate_on(pool.as_ref(), &mut chains, &alive, &gp);
+        // As a sub-step does (and as this probe timed before the forces were deferred).
+        strips.add_forces(&mut chains);
         times.push(t.elapsed().as_secs_f64() * 1e3);
     }
     times.sort_by(f64::total_cmp);
