@@ -1,25 +1,25 @@
-//! Four f64 lanes: the AVX2 type and its portable twin, with the same methods.
+//! Eight f32 lanes: the AVX2 type and its portable twin, with the same methods.
 //!
 //! An operation is written once as a generic function over [`Lanes`] and instantiated twice:
-//! with [`F64x4Portable`] (plain Rust, always compiled) and, on x86-64, with [`F64x4`] inside a
+//! with [`F32x8Portable`] (plain Rust, always compiled) and, on x86-64, with [`F32x8`] inside a
 //! function compiled with `#[target_feature(enable = "avx2")]` (every method here is
 //! `#[inline(always)]`, so the intrinsics end up in that function). Each method does what its
 //! scalar Rust counterpart does lane by lane, bit for bit (see the module docs of
 //! [`crate::simd`]).
 
-/// Four f64 lanes and their comparison masks.
+/// Eight f32 lanes and their comparison masks.
 pub trait Lanes: Copy {
     /// A per-lane boolean.
     type Mask: Copy;
     /// Every lane `x`.
-    fn splat(x: f64) -> Self;
-    /// Lanes `s[0..4]`.
-    fn load(s: &[f64; 4]) -> Self;
-    /// Writes the lanes to `out[0..4]`.
-    fn store(self, out: &mut [f64; 4]);
-    /// Four rows in, four columns out: lane `i` of column `j` is `rows[i][j]` (data movement
+    fn splat(x: f32) -> Self;
+    /// Lanes `s[0..8]`.
+    fn load(s: &[f32; 8]) -> Self;
+    /// Writes the lanes to `out[0..8]`.
+    fn store(self, out: &mut [f32; 8]);
+    /// Eight rows in, eight columns out: lane `i` of column `j` is `rows[i][j]` (data movement
     /// only, so the twins agree trivially).
-    fn transpose(rows: [&[f64; 4]; 4]) -> [Self; 4];
+    fn transpose(rows: [&[f32; 8]; 8]) -> [Self; 8];
     /// `self + o`.
     fn add(self, o: Self) -> Self;
     /// `self - o`.
@@ -72,96 +72,96 @@ pub trait Lanes: Copy {
     }
 }
 
-/// The portable twin: four f64 in an array, each method the scalar operation lane by lane.
+/// The portable twin: eight f32 in an array, each method the scalar operation lane by lane.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct F64x4Portable(pub [f64; 4]);
+pub struct F32x8Portable(pub [f32; 8]);
 
 #[inline(always)]
-fn map2(a: [f64; 4], b: [f64; 4], f: impl Fn(f64, f64) -> f64) -> [f64; 4] {
-    [f(a[0], b[0]), f(a[1], b[1]), f(a[2], b[2]), f(a[3], b[3])]
+fn map2(a: [f32; 8], b: [f32; 8], f: impl Fn(f32, f32) -> f32) -> [f32; 8] {
+    std::array::from_fn(|i| f(a[i], b[i]))
 }
 
 #[inline(always)]
-fn cmp(a: [f64; 4], b: [f64; 4], f: impl Fn(f64, f64) -> bool) -> [bool; 4] {
-    [f(a[0], b[0]), f(a[1], b[1]), f(a[2], b[2]), f(a[3], b[3])]
+fn cmp(a: [f32; 8], b: [f32; 8], f: impl Fn(f32, f32) -> bool) -> [bool; 8] {
+    std::array::from_fn(|i| f(a[i], b[i]))
 }
 
-impl Lanes for F64x4Portable {
-    type Mask = [bool; 4];
+impl Lanes for F32x8Portable {
+    type Mask = [bool; 8];
     #[inline(always)]
-    fn splat(x: f64) -> Self {
-        F64x4Portable([x; 4])
+    fn splat(x: f32) -> Self {
+        F32x8Portable([x; 8])
     }
     #[inline(always)]
-    fn load(s: &[f64; 4]) -> Self {
-        F64x4Portable(*s)
+    fn load(s: &[f32; 8]) -> Self {
+        F32x8Portable(*s)
     }
     #[inline(always)]
-    fn store(self, out: &mut [f64; 4]) {
+    fn store(self, out: &mut [f32; 8]) {
         *out = self.0;
     }
     #[inline(always)]
-    fn transpose(rows: [&[f64; 4]; 4]) -> [Self; 4] {
-        std::array::from_fn(|j| F64x4Portable(std::array::from_fn(|i| rows[i][j])))
+    fn transpose(rows: [&[f32; 8]; 8]) -> [Self; 8] {
+        std::array::from_fn(|j| F32x8Portable(std::array::from_fn(|i| rows[i][j])))
     }
     #[inline(always)]
     fn add(self, o: Self) -> Self {
-        F64x4Portable(map2(self.0, o.0, |a, b| a + b))
+        F32x8Portable(map2(self.0, o.0, |a, b| a + b))
     }
     #[inline(always)]
     fn sub(self, o: Self) -> Self {
-        F64x4Portable(map2(self.0, o.0, |a, b| a - b))
+        F32x8Portable(map2(self.0, o.0, |a, b| a - b))
     }
     #[inline(always)]
     fn mul(self, o: Self) -> Self {
-        F64x4Portable(map2(self.0, o.0, |a, b| a * b))
+        F32x8Portable(map2(self.0, o.0, |a, b| a * b))
     }
     #[inline(always)]
     fn div(self, o: Self) -> Self {
-        F64x4Portable(map2(self.0, o.0, |a, b| a / b))
+        F32x8Portable(map2(self.0, o.0, |a, b| a / b))
     }
     #[inline(always)]
     fn sqrt(self) -> Self {
-        F64x4Portable(self.0.map(f64::sqrt))
+        F32x8Portable(self.0.map(f32::sqrt))
     }
     #[inline(always)]
     fn neg(self) -> Self {
-        F64x4Portable(self.0.map(|a| -a))
+        F32x8Portable(self.0.map(|a| -a))
     }
     #[inline(always)]
-    fn lt(self, o: Self) -> [bool; 4] {
+    fn lt(self, o: Self) -> [bool; 8] {
         cmp(self.0, o.0, |a, b| a < b)
     }
     #[inline(always)]
-    fn gt(self, o: Self) -> [bool; 4] {
+    fn gt(self, o: Self) -> [bool; 8] {
         cmp(self.0, o.0, |a, b| a > b)
     }
     #[inline(always)]
-    fn le(self, o: Self) -> [bool; 4] {
+    fn le(self, o: Self) -> [bool; 8] {
         cmp(self.0, o.0, |a, b| a <= b)
     }
     #[inline(always)]
-    fn ge(self, o: Self) -> [bool; 4] {
+    fn ge(self, o: Self) -> [bool; 8] {
         cmp(self.0, o.0, |a, b| a >= b)
     }
     #[inline(always)]
-    fn select(m: [bool; 4], a: Self, b: Self) -> Self {
-        F64x4Portable(std::array::from_fn(|i| if m[i] { a.0[i] } else { b.0[i] }))
+    fn select(m: [bool; 8], a: Self, b: Self) -> Self {
+        F32x8Portable(std::array::from_fn(|i| if m[i] { a.0[i] } else { b.0[i] }))
     }
     #[inline(always)]
-    fn and(m: [bool; 4], n: [bool; 4]) -> [bool; 4] {
+    fn and(m: [bool; 8], n: [bool; 8]) -> [bool; 8] {
         std::array::from_fn(|i| m[i] & n[i])
     }
     #[inline(always)]
-    fn or(m: [bool; 4], n: [bool; 4]) -> [bool; 4] {
+    fn or(m: [bool; 8], n: [bool; 8]) -> [bool; 8] {
         std::array::from_fn(|i| m[i] | n[i])
     }
     #[inline(always)]
-    fn not(m: [bool; 4]) -> [bool; 4] {
+    fn not(m: [bool; 8]) -> [bool; 8] {
         m.map(|x| !x)
     }
     #[inline(always)]
-    fn bits(m: [bool; 4]) -> u32 {
+    fn bits(m: [bool; 8]) -> u32 {
         m.iter()
             .enumerate()
             .fold(0, |acc, (i, &b)| acc | (u32::from(b) << i))
@@ -169,7 +169,7 @@ impl Lanes for F64x4Portable {
 }
 
 #[cfg(target_arch = "x86_64")]
-pub use avx2::F64x4;
+pub use avx2::F32x8;
 
 #[cfg(target_arch = "x86_64")]
 mod avx2 {
@@ -177,106 +177,123 @@ mod avx2 {
 
     use super::Lanes;
 
-    /// Four f64 in an AVX register. Only to be used inside functions compiled with
+    /// Eight f32 in an AVX register. Only to be used inside functions compiled with
     /// `#[target_feature(enable = "avx2")]`, on a processor that has it (checked at run time by
     /// [`crate::simd::level`]): the methods are inlined there.
     #[derive(Clone, Copy, Debug)]
-    pub struct F64x4(pub __m256d);
+    pub struct F32x8(pub __m256);
 
     // SAFETY (every `unsafe` block below): the intrinsics need AVX, which the callers guarantee
-    // (see the type's docs); the loads and stores go through `&[f64; 4]`, four valid f64.
+    // (see the type's docs); the loads and stores go through `&[f32; 8]`, eight valid f32.
     #[allow(unsafe_code)]
-    impl Lanes for F64x4 {
-        type Mask = __m256d;
+    impl Lanes for F32x8 {
+        type Mask = __m256;
         #[inline(always)]
-        fn splat(x: f64) -> Self {
-            F64x4(unsafe { _mm256_set1_pd(x) })
+        fn splat(x: f32) -> Self {
+            F32x8(unsafe { _mm256_set1_ps(x) })
         }
         #[inline(always)]
-        fn load(s: &[f64; 4]) -> Self {
-            F64x4(unsafe { _mm256_loadu_pd(s.as_ptr()) })
+        fn load(s: &[f32; 8]) -> Self {
+            F32x8(unsafe { _mm256_loadu_ps(s.as_ptr()) })
         }
         #[inline(always)]
-        fn store(self, out: &mut [f64; 4]) {
-            unsafe { _mm256_storeu_pd(out.as_mut_ptr(), self.0) }
+        fn store(self, out: &mut [f32; 8]) {
+            unsafe { _mm256_storeu_ps(out.as_mut_ptr(), self.0) }
         }
         #[inline(always)]
-        fn transpose(rows: [&[f64; 4]; 4]) -> [Self; 4] {
+        fn transpose(rows: [&[f32; 8]; 8]) -> [Self; 8] {
             unsafe {
-                let [r0, r1, r2, r3] = rows.map(|r| _mm256_loadu_pd(r.as_ptr()));
-                // (r0[0] r1[0] r0[2] r1[2]), (r0[1] r1[1] r0[3] r1[3]), and the same of r2, r3.
-                let t0 = _mm256_unpacklo_pd(r0, r1);
-                let t1 = _mm256_unpackhi_pd(r0, r1);
-                let t2 = _mm256_unpacklo_pd(r2, r3);
-                let t3 = _mm256_unpackhi_pd(r2, r3);
-                // Low halves together, then high halves together.
+                let [r0, r1, r2, r3, r4, r5, r6, r7] = rows.map(|r| _mm256_loadu_ps(r.as_ptr()));
+                // Per 128-bit half: (r0[0] r1[0] r0[1] r1[1]) and (r0[2] r1[2] r0[3] r1[3]).
+                let t0 = _mm256_unpacklo_ps(r0, r1);
+                let t1 = _mm256_unpackhi_ps(r0, r1);
+                let t2 = _mm256_unpacklo_ps(r2, r3);
+                let t3 = _mm256_unpackhi_ps(r2, r3);
+                let t4 = _mm256_unpacklo_ps(r4, r5);
+                let t5 = _mm256_unpackhi_ps(r4, r5);
+                let t6 = _mm256_unpacklo_ps(r6, r7);
+                let t7 = _mm256_unpackhi_ps(r6, r7);
+                // Per half: column k of rows 0–3 (or 4–7), columns 0–3 low, 4–7 high.
+                let u0 = _mm256_shuffle_ps::<0x44>(t0, t2);
+                let u1 = _mm256_shuffle_ps::<0xEE>(t0, t2);
+                let u2 = _mm256_shuffle_ps::<0x44>(t1, t3);
+                let u3 = _mm256_shuffle_ps::<0xEE>(t1, t3);
+                let u4 = _mm256_shuffle_ps::<0x44>(t4, t6);
+                let u5 = _mm256_shuffle_ps::<0xEE>(t4, t6);
+                let u6 = _mm256_shuffle_ps::<0x44>(t5, t7);
+                let u7 = _mm256_shuffle_ps::<0xEE>(t5, t7);
+                // Rows 0–3 and 4–7 of a column together: low halves, then high halves.
                 [
-                    F64x4(_mm256_permute2f128_pd::<0x20>(t0, t2)),
-                    F64x4(_mm256_permute2f128_pd::<0x20>(t1, t3)),
-                    F64x4(_mm256_permute2f128_pd::<0x31>(t0, t2)),
-                    F64x4(_mm256_permute2f128_pd::<0x31>(t1, t3)),
+                    F32x8(_mm256_permute2f128_ps::<0x20>(u0, u4)),
+                    F32x8(_mm256_permute2f128_ps::<0x20>(u1, u5)),
+                    F32x8(_mm256_permute2f128_ps::<0x20>(u2, u6)),
+                    F32x8(_mm256_permute2f128_ps::<0x20>(u3, u7)),
+                    F32x8(_mm256_permute2f128_ps::<0x31>(u0, u4)),
+                    F32x8(_mm256_permute2f128_ps::<0x31>(u1, u5)),
+                    F32x8(_mm256_permute2f128_ps::<0x31>(u2, u6)),
+                    F32x8(_mm256_permute2f128_ps::<0x31>(u3, u7)),
                 ]
             }
         }
         #[inline(always)]
         fn add(self, o: Self) -> Self {
-            F64x4(unsafe { _mm256_add_pd(self.0, o.0) })
+            F32x8(unsafe { _mm256_add_ps(self.0, o.0) })
         }
         #[inline(always)]
         fn sub(self, o: Self) -> Self {
-            F64x4(unsafe { _mm256_sub_pd(self.0, o.0) })
+            F32x8(unsafe { _mm256_sub_ps(self.0, o.0) })
         }
         #[inline(always)]
         fn mul(self, o: Self) -> Self {
-            F64x4(unsafe { _mm256_mul_pd(self.0, o.0) })
+            F32x8(unsafe { _mm256_mul_ps(self.0, o.0) })
         }
         #[inline(always)]
         fn div(self, o: Self) -> Self {
-            F64x4(unsafe { _mm256_div_pd(self.0, o.0) })
+            F32x8(unsafe { _mm256_div_ps(self.0, o.0) })
         }
         #[inline(always)]
         fn sqrt(self) -> Self {
-            F64x4(unsafe { _mm256_sqrt_pd(self.0) })
+            F32x8(unsafe { _mm256_sqrt_ps(self.0) })
         }
         #[inline(always)]
         fn neg(self) -> Self {
-            F64x4(unsafe { _mm256_xor_pd(self.0, _mm256_set1_pd(-0.0)) })
+            F32x8(unsafe { _mm256_xor_ps(self.0, _mm256_set1_ps(-0.0)) })
         }
         #[inline(always)]
-        fn lt(self, o: Self) -> __m256d {
-            unsafe { _mm256_cmp_pd::<_CMP_LT_OQ>(self.0, o.0) }
+        fn lt(self, o: Self) -> __m256 {
+            unsafe { _mm256_cmp_ps::<_CMP_LT_OQ>(self.0, o.0) }
         }
         #[inline(always)]
-        fn gt(self, o: Self) -> __m256d {
-            unsafe { _mm256_cmp_pd::<_CMP_GT_OQ>(self.0, o.0) }
+        fn gt(self, o: Self) -> __m256 {
+            unsafe { _mm256_cmp_ps::<_CMP_GT_OQ>(self.0, o.0) }
         }
         #[inline(always)]
-        fn le(self, o: Self) -> __m256d {
-            unsafe { _mm256_cmp_pd::<_CMP_LE_OQ>(self.0, o.0) }
+        fn le(self, o: Self) -> __m256 {
+            unsafe { _mm256_cmp_ps::<_CMP_LE_OQ>(self.0, o.0) }
         }
         #[inline(always)]
-        fn ge(self, o: Self) -> __m256d {
-            unsafe { _mm256_cmp_pd::<_CMP_GE_OQ>(self.0, o.0) }
+        fn ge(self, o: Self) -> __m256 {
+            unsafe { _mm256_cmp_ps::<_CMP_GE_OQ>(self.0, o.0) }
         }
         #[inline(always)]
-        fn select(m: __m256d, a: Self, b: Self) -> Self {
-            F64x4(unsafe { _mm256_blendv_pd(b.0, a.0, m) })
+        fn select(m: __m256, a: Self, b: Self) -> Self {
+            F32x8(unsafe { _mm256_blendv_ps(b.0, a.0, m) })
         }
         #[inline(always)]
-        fn and(m: __m256d, n: __m256d) -> __m256d {
-            unsafe { _mm256_and_pd(m, n) }
+        fn and(m: __m256, n: __m256) -> __m256 {
+            unsafe { _mm256_and_ps(m, n) }
         }
         #[inline(always)]
-        fn or(m: __m256d, n: __m256d) -> __m256d {
-            unsafe { _mm256_or_pd(m, n) }
+        fn or(m: __m256, n: __m256) -> __m256 {
+            unsafe { _mm256_or_ps(m, n) }
         }
         #[inline(always)]
-        fn not(m: __m256d) -> __m256d {
-            unsafe { _mm256_xor_pd(m, _mm256_castsi256_pd(_mm256_set1_epi64x(-1))) }
+        fn not(m: __m256) -> __m256 {
+            unsafe { _mm256_xor_ps(m, _mm256_castsi256_ps(_mm256_set1_epi32(-1))) }
         }
         #[inline(always)]
-        fn bits(m: __m256d) -> u32 {
-            unsafe { _mm256_movemask_pd(m) as u32 }
+        fn bits(m: __m256) -> u32 {
+            unsafe { _mm256_movemask_ps(m) as u32 }
         }
     }
 }
@@ -288,20 +305,20 @@ mod tests {
     /// Lane `i` of column `j` is `rows[i][j]`, on every level this processor has.
     #[test]
     fn transpose_turns_rows_into_lanes_on_both_twins() {
-        let rows: [[f64; 4]; 4] = std::array::from_fn(|i| {
-            std::array::from_fn(|j| (10 * i + j) as f64 + if j == 3 { -0.0 } else { 0.5 })
+        let rows: [[f32; 8]; 8] = std::array::from_fn(|i| {
+            std::array::from_fn(|j| (10 * i + j) as f32 + if j == 3 { -0.0 } else { 0.5 })
         });
-        let refs = [&rows[0], &rows[1], &rows[2], &rows[3]];
-        let want: [[f64; 4]; 4] = std::array::from_fn(|j| std::array::from_fn(|i| rows[i][j]));
-        let portable = F64x4Portable::transpose(refs).map(|c| c.0);
+        let refs: [&[f32; 8]; 8] = std::array::from_fn(|i| &rows[i]);
+        let want: [[f32; 8]; 8] = std::array::from_fn(|j| std::array::from_fn(|i| rows[i][j]));
+        let portable = F32x8Portable::transpose(refs).map(|c| c.0);
         assert_eq!(portable, want);
         #[cfg(target_arch = "x86_64")]
         if crate::simd::best_available() == crate::simd::Level::Avx2 {
             #[target_feature(enable = "avx2")]
             #[allow(unsafe_code)]
-            unsafe fn columns(refs: [&[f64; 4]; 4]) -> [[f64; 4]; 4] {
-                F64x4::transpose(refs).map(|c| {
-                    let mut out = [0.0; 4];
+            unsafe fn columns(refs: [&[f32; 8]; 8]) -> [[f32; 8]; 8] {
+                F32x8::transpose(refs).map(|c| {
+                    let mut out = [0.0; 8];
                     c.store(&mut out);
                     out
                 })
@@ -310,8 +327,8 @@ mod tests {
             #[allow(unsafe_code)]
             let avx2 = unsafe { columns(refs) };
             assert_eq!(
-                avx2.map(|c| c.map(f64::to_bits)),
-                want.map(|c| c.map(f64::to_bits))
+                avx2.map(|c| c.map(f32::to_bits)),
+                want.map(|c| c.map(f32::to_bits))
             );
         }
     }

@@ -2,7 +2,7 @@
 //! has a portable twin in plain Rust, and [`level`] chooses between them once per process.
 //!
 //! The model is tiny-skia's `src/wide/`: a small lane type per instruction set with the same
-//! methods ([`lanes::F64x4`] and its portable twin [`lanes::F64x4Portable`]), and each operation
+//! methods ([`lanes::F32x8`] and its portable twin [`lanes::F32x8Portable`]), and each operation
 //! (for now the narrow phase of the hair–hair collisions, [`pairs`]) written ONCE, generically
 //! over the lane type, so both twins do the same arithmetic in the same order: IEEE additions,
 //! multiplications, divisions and square roots are exactly rounded in scalar and vector units
@@ -32,7 +32,7 @@ use std::sync::OnceLock;
 pub enum Level {
     /// Plain Rust (what the compiler makes of it for the build's target).
     Portable,
-    /// x86-64 AVX2 (four f64 lanes), detected at run time.
+    /// x86-64 AVX2 (eight f32 lanes), detected at run time.
     Avx2,
 }
 

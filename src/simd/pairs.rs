@@ -1,92 +1,117 @@
-//! The narrow phase of the hair–hair collisions (AWT §4.1–§4.2), four pairs at a time: closest
-//! points of the two segment axes, the distance test, viscous friction (eq. 1) and repulsion
-//! (eq. 2) at the closest points.
+//! The narrow phase of the hair–hair collisions (AWT §4.1–§4.2), eight pairs at a time in
+//! `f32`: closest points of the two segment axes, the distance test, viscous friction (eq. 1)
+//! and repulsion (eq. 2) at the closest points.
 //!
 //! It is the general case of `solver::awt::collide::narrow::contact`, operation for operation
 //! (same formulas, same order, same roundings: see [`crate::simd`]), so a lane's results are
 //! that routine's bit for bit. Lanes outside the general case are flagged `rare` for the caller
 //! to redo with the scalar routine: a segment too short to have a direction (the closest-point
-//! routine's early returns), a zero product of squared lengths, axes that intersect (the
-//! repulsion normal then comes from the cross product), and anything not finite. Parallel axes
-//! (the middle of the overlap) are computed in the lanes: sibling wisps are often nearly so.
+//! routine's early returns), a zero product of squared lengths, axes that intersect or nearly
+//! so (the repulsion normal then comes from the cross product), and anything not finite.
+//! Parallel axes (the middle of the overlap) are computed in the lanes: sibling wisps are often
+//! nearly so.
+//!
+//! **Why `f32`.** Eight lanes in an AVX register instead of four `f64`, and a segment in one
+//! 64-byte cache line instead of two and a half: the stage is bound by the work per tested
+//! pair. The positions of a head of hair are within a metre or two of the origin, so `f32`
+//! places a closest point to about 0.1 µm, against wisp radii of a millimetre and more; the
+//! thresholds that tell parallel and intersecting axes apart are set well above that rounding
+//! (see `narrow::contact`).
 //!
 //! The caller keeps its segments as [`Segment`]s (or in records that hold one, through
 //! `AsRef`), queues up to [`BATCH`] candidate pairs as index pairs, calls [`narrow`], and reads
-//! [`PairOut`]. The lanes are filled straight from the records, four segments at a time, by
-//! 4×4 transposes in registers ([`Lanes::transpose`]): copying 34 fields per pair into a
+//! [`PairOut`]. The lanes are filled straight from the records, eight segments at a time, by
+//! 8×8 transposes in registers ([`Lanes::transpose`]): copying 34 fields per pair into a
 //! structure of arrays first took about a seventh of the hair–hair stage.
 
-use super::lanes::{F64x4Portable, Lanes};
+use super::lanes::{F32x8Portable, Lanes};
 use super::Level;
 
-/// Pairs in a batch (a multiple of 4): enough to amortise the call, few enough for the
-/// results (about 4 kB) to stay in the L1 cache.
+/// Pairs in a batch (a multiple of 8): enough to amortise the call, few enough for the
+/// results (about 2 kB) to stay in the L1 cache.
 pub const BATCH: usize = 64;
 
-/// One segment as the narrow phase reads it: sixteen f64 in four rows of four, so that four
-/// segments become the lanes of their fifteen fields with four 4×4 transposes (no copying into
-/// a structure of arrays first).
-#[repr(C, align(32))]
+/// Lanes per group.
+const W: usize = 8;
+
+/// A segment whose squared length is at most this fraction of the largest of the pair's
+/// squared lengths and squared gap is a point (the closest-point routine's early returns).
+pub const TINY: f32 = 1e-12;
+
+/// Axes whose `|d1 × d2|²` is at most this fraction of `|d1|²·|d2|²` (an angle under about
+/// 0.6°) are parallel: the closest points are then the middle of the overlap. Far above the
+/// `f32` rounding of the difference (about 1e-7), so the general formula is only used where
+/// it is accurate to about 1e-3.
+pub const PARALLEL: f32 = 1e-4;
+
+/// Axes closer than this fraction of the sum of the radii intersect: the normal then comes
+/// from their cross product (the difference of the closest points is rounding).
+pub const INTERSECTING: f32 = 1e-3;
+
+/// One segment as the narrow phase reads it: sixteen f32 in two rows of eight (one cache
+/// line), so that eight segments become the lanes of their fifteen fields with two 8×8
+/// transposes (no copying into a structure of arrays first).
+#[repr(C, align(64))]
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Segment {
     /// The parent node's position, m.
-    pub x: [f64; 3],
-    /// `|d|²`, computed as `(d.x·d.x + d.y·d.y) + d.z·d.z`.
-    pub len2: f64,
-    /// Child minus parent position, m.
-    pub d: [f64; 3],
+    pub x: [f32; 3],
+    /// `|d|²`, computed in f32 as `(d.x·d.x + d.y·d.y) + d.z·d.z` from the rounded `d`.
+    pub len2: f32,
+    /// Child minus parent position (the difference taken in f64, then rounded), m.
+    pub d: [f32; 3],
     /// The cylinder's radius, m.
-    pub radius: f64,
+    pub radius: f32,
     /// The parent node's velocity, m/s.
-    pub vp: [f64; 3],
+    pub vp: [f32; 3],
     /// The child node's mass, kg.
-    pub mass: f64,
+    pub mass: f32,
     /// The child node's velocity, m/s.
-    pub vc: [f64; 3],
-    /// Fills the fourth row (always 0).
-    pad: f64,
+    pub vc: [f32; 3],
+    /// Fills the second row (always 0).
+    pad: f32,
 }
 
-// Four rows of four f64, nothing else: what [`Segment::rows`] relies on.
-const _: () = assert!(std::mem::size_of::<Segment>() == 128);
+// Two rows of eight f32, nothing else: what [`Segment::rows`] relies on.
+const _: () = assert!(std::mem::size_of::<Segment>() == 64);
 
 impl Segment {
-    /// A segment from its fields.
-    #[allow(clippy::too_many_arguments)]
+    /// A segment from its fields in f64, each rounded to the nearest f32.
     pub fn new(
         x: [f64; 3],
         d: [f64; 3],
-        len2: f64,
         vp: [f64; 3],
         vc: [f64; 3],
         radius: f64,
         mass: f64,
     ) -> Self {
+        let f = |v: [f64; 3]| v.map(|c| c as f32);
+        let d = f(d);
         Segment {
-            x,
-            len2,
+            x: f(x),
+            len2: (d[0] * d[0] + d[1] * d[1]) + d[2] * d[2],
             d,
-            radius,
-            vp,
-            mass,
-            vc,
+            radius: radius as f32,
+            vp: f(vp),
+            mass: mass as f32,
+            vc: f(vc),
             pad: 0.0,
         }
     }
 
-    /// The sixteen f64 as four rows: `[x, len2]`, `[d, radius]`, `[vp, mass]`, `[vc, 0]`.
+    /// The sixteen f32 as two rows: `[x, len2, d, radius]`, `[vp, mass, vc, 0]`.
     #[inline(always)]
-    pub fn rows(&self) -> &[[f64; 4]; 4] {
-        // SAFETY: `Segment` is `repr(C)`, sixteen f64 fields and no padding (asserted above), so
-        // it has the layout of `[[f64; 4]; 4]`, whose alignment (8) it exceeds.
+    pub fn rows(&self) -> &[[f32; 8]; 2] {
+        // SAFETY: `Segment` is `repr(C)`, sixteen f32 fields and no padding (asserted above), so
+        // it has the layout of `[[f32; 8]; 2]`, whose alignment (4) it exceeds.
         #[allow(unsafe_code)]
         unsafe {
-            &*(self as *const Segment).cast::<[[f64; 4]; 4]>()
+            &*(self as *const Segment).cast::<[[f32; 8]; 2]>()
         }
     }
 }
 
-/// Four segments' fields, lane by lane.
+/// Eight segments' fields, lane by lane.
 struct SegLanes<V> {
     x: [V; 3],
     len2: V,
@@ -100,18 +125,11 @@ struct SegLanes<V> {
 impl<V: Lanes> SegLanes<V> {
     /// Lane `k` is `segs[k]`.
     #[inline(always)]
-    fn load<T: AsRef<Segment>>(segs: [&T; 4]) -> Self {
-        let rows = [
-            segs[0].as_ref().rows(),
-            segs[1].as_ref().rows(),
-            segs[2].as_ref().rows(),
-            segs[3].as_ref().rows(),
-        ];
-        let [x0, x1, x2, len2] = V::transpose([&rows[0][0], &rows[1][0], &rows[2][0], &rows[3][0]]);
-        let [d0, d1, d2, radius] =
-            V::transpose([&rows[0][1], &rows[1][1], &rows[2][1], &rows[3][1]]);
-        let [v0, v1, v2, mass] = V::transpose([&rows[0][2], &rows[1][2], &rows[2][2], &rows[3][2]]);
-        let [c0, c1, c2, _] = V::transpose([&rows[0][3], &rows[1][3], &rows[2][3], &rows[3][3]]);
+    fn load<T: AsRef<Segment>>(segs: [&T; W]) -> Self {
+        let rows: [&[[f32; 8]; 2]; W] = std::array::from_fn(|k| segs[k].as_ref().rows());
+        let [x0, x1, x2, len2, d0, d1, d2, radius] =
+            V::transpose(std::array::from_fn(|k| &rows[k][0]));
+        let [v0, v1, v2, mass, c0, c1, c2, _] = V::transpose(std::array::from_fn(|k| &rows[k][1]));
         SegLanes {
             x: [x0, x1, x2],
             len2,
@@ -128,26 +146,26 @@ impl<V: Lanes> SegLanes<V> {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PairParams {
     /// α, s⁻¹ (k_f = α·m).
-    pub friction: f64,
+    pub friction: f32,
     /// k_r per kilogram, s⁻².
-    pub repulsion: f64,
+    pub repulsion: f32,
     /// The square of the cosine threshold of the repulsion, `thr · thr`.
-    pub cos2_threshold: f64,
+    pub cos2_threshold: f32,
     /// The step, floored: `dt.max(1e-12)`, s.
-    pub dt_floor: f64,
+    pub dt_floor: f32,
 }
 
 /// What [`narrow`] finds, lane by lane (lanes at and beyond the number of pairs are garbage).
 #[derive(Clone, Debug)]
 pub struct PairOut {
     /// Closest point on the first axis, as a fraction from parent (0) to child (1).
-    pub s: [f64; BATCH],
+    pub s: [f32; BATCH],
     /// Closest point on the second axis.
-    pub t: [f64; BATCH],
+    pub t: [f32; BATCH],
     /// Friction (eq. 1) on the first segment, N, per coordinate.
-    pub friction: [[f64; BATCH]; 3],
+    pub friction: [[f32; BATCH]; 3],
     /// Repulsion (eq. 2) on the first segment, N.
-    pub repulsion: [[f64; BATCH]; 3],
+    pub repulsion: [[f32; BATCH]; 3],
     /// Bit `i`: the cylinders of pair `i` intersect (valid where `rare` is clear).
     pub hit: u64,
     /// Bit `i`: pair `i` is outside the general case; redo it with the scalar routine.
@@ -198,7 +216,7 @@ pub fn narrow_on<T: AsRef<Segment>>(
                 narrow_avx2(segs, pairs, p, out)
             }
         }
-        _ => kernel::<F64x4Portable, T>(segs, pairs, p, out),
+        _ => kernel::<F32x8Portable, T>(segs, pairs, p, out),
     }
 }
 
@@ -215,12 +233,12 @@ unsafe fn narrow_avx2<T: AsRef<Segment>>(
     p: &PairParams,
     out: &mut PairOut,
 ) {
-    kernel::<super::lanes::F64x4, T>(segs, pairs, p, out);
+    kernel::<super::lanes::F32x8, T>(segs, pairs, p, out);
 }
 
 #[inline(always)]
-fn at_mut(a: &mut [f64; BATCH], i: usize) -> &mut [f64; 4] {
-    (&mut a[i..i + 4])
+fn at_mut(a: &mut [f32; BATCH], i: usize) -> &mut [f32; W] {
+    (&mut a[i..i + W])
         .try_into()
         .expect("a lane group inside the batch")
 }
@@ -231,13 +249,13 @@ fn dot<V: Lanes>(u: &[V; 3], v: &[V; 3]) -> V {
     u[0].mul(v[0]).add(u[1].mul(v[1])).add(u[2].mul(v[2]))
 }
 
-/// The pairs of lanes `i..i + 4` as indices; lanes past the end repeat the last pair (the
+/// The pairs of lanes `i..i + 8` as indices; lanes past the end repeat the last pair (the
 /// kernel clears their bits). A function, not a closure in the kernel: a closure is not
 /// compiled for AVX2 with the function it sits in unless the compiler happens to inline it.
 #[inline(always)]
-fn lane_pairs(pairs: &[(u32, u32)], i: usize) -> [(usize, usize); 4] {
+fn lane_pairs(pairs: &[(u32, u32)], i: usize) -> [(usize, usize); W] {
     let last = pairs.len() - 1;
-    let mut out = [(0, 0); 4];
+    let mut out = [(0, 0); W];
     for (k, o) in out.iter_mut().enumerate() {
         let (a, b) = pairs[(i + k).min(last)];
         *o = (a as usize, b as usize);
@@ -263,23 +281,24 @@ fn kernel<V: Lanes, T: AsRef<Segment>>(
     let n = pairs.len();
     let mut i = 0;
     while i < n {
-        let [p0, p1, p2, p3] = lane_pairs(pairs, i);
-        let a = SegLanes::<V>::load([&segs[p0.0], &segs[p1.0], &segs[p2.0], &segs[p3.0]]);
-        let b = SegLanes::<V>::load([&segs[p0.1], &segs[p1.1], &segs[p2.1], &segs[p3.1]]);
+        let lp = lane_pairs(pairs, i);
+        let a = SegLanes::<V>::load(std::array::from_fn(|k| &segs[lp[k].0]));
+        let b = SegLanes::<V>::load(std::array::from_fn(|k| &segs[lp[k].1]));
         let (xa, da, la) = (a.x, a.d, a.len2);
         let (xb, db, le) = (b.x, b.d, b.len2);
 
-        // closest_params(xpa, da, la, xpb, db, le)
+        // closest_params(xa, da, la, xb, db, le)
         let r = [xa[0].sub(xb[0]), xa[1].sub(xb[1]), xa[2].sub(xb[2])];
         let f = dot(&db, &r);
         let rr = dot(&r, &r);
         let scale = la.max_sel(le).max_sel(rr);
-        let tiny = V::splat(1e-24).mul(scale);
+        let tiny = V::splat(TINY).mul(scale);
         // The early returns of a segment shorter than `tiny` (and NaN anywhere in them).
         let mut rare = V::or(V::not(la.gt(tiny)), V::not(le.gt(tiny)));
         let c = dot(&da, &r);
         let bb = dot(&da, &db);
-        let denom = la.mul(le).sub(bb.mul(bb));
+        let len2 = la.mul(le);
+        let denom = len2.sub(bb.mul(bb));
         let general = bb.mul(f).sub(c.mul(le)).div(denom).clamp01();
         // Parallel: seg 2's ends project on seg 1 at -c/a and (b - c)/a.
         let pp = c.neg().div(la);
@@ -291,7 +310,7 @@ fn kernel<V: Lanes, T: AsRef<Segment>>(
             half.mul(lo.add(hi)),
             half.mul(pp.add(qq)).clamp01(),
         );
-        let s0 = V::select(denom.gt(V::splat(1e-12).mul(la).mul(le)), general, parallel);
+        let s0 = V::select(denom.gt(V::splat(PARALLEL).mul(len2)), general, parallel);
         let t0 = bb.mul(s0).add(f).div(le);
         let below = t0.lt(zero);
         let above = t0.gt(one);
@@ -336,10 +355,9 @@ fn kernel<V: Lanes, T: AsRef<Segment>>(
 
         // Eq. 2: repulsion between wisps crossing at a large enough angle, while they approach,
         // capped at the impulse that stops the approach within the step.
-        let len2 = la.mul(le);
         rare = V::or(rare, V::not(len2.gt(zero)));
         let crossing = bb.mul(bb).lt(thr2.mul(len2));
-        // Most wisps in contact are near parallel (friction only): a group of four with no
+        // Most wisps in contact are near parallel (friction only): a group of eight with no
         // crossing pair in contact skips the normal's root and four divisions. Its repulsion
         // is zero, as the full computation stores; a crossing lane that is not in contact is
         // then not marked rare, which changes nothing: the scalar routine returns no contact
@@ -353,7 +371,7 @@ fn kernel<V: Lanes, T: AsRef<Segment>>(
             // Intersecting axes: the normal is the cross product's (scalar routine).
             rare = V::or(
                 rare,
-                V::and(crossing, V::not(d.gt(V::splat(1e-9).mul(rsum)))),
+                V::and(crossing, V::not(d.gt(V::splat(INTERSECTING).mul(rsum)))),
             );
             let n = [delta[0].div(d), delta[1].div(d), delta[2].div(d)];
             let dv = [v1[0].sub(v2[0]), v1[1].sub(v2[1]), v1[2].sub(v2[2])];
@@ -368,7 +386,7 @@ fn kernel<V: Lanes, T: AsRef<Segment>>(
         t.store(at_mut(&mut out.t, i));
         hit_all |= u64::from(V::bits(hit)) << i;
         rare_all |= u64::from(V::bits(rare)) << i;
-        i += 4;
+        i += W;
     }
     // Lanes past the end are garbage: clear their bits.
     let live = if n >= 64 { u64::MAX } else { (1u64 << n) - 1 };

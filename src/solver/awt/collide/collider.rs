@@ -225,7 +225,7 @@ impl HairCollider {
         );
         let nodes = force.len();
         self.broad.prepare(segs, pos, vel, nodes);
-        let eps2 = p.epsilon * p.epsilon;
+        let eps2 = (p.epsilon * p.epsilon) as f32;
         let broad = &self.broad;
         let mut response = Response::new(segs, nodes, &mut self.inv_mass, &mut self.load);
         // The search is cut into CHUNKS runs of cells whatever the thread count, and each

@@ -125,6 +125,7 @@ impl Broad {
                 child,
                 inv_parent: self.inv_mass[parent as usize],
                 inv_child: self.inv_mass[child as usize],
+                mass: segs.child_mass[i],
             }
         }));
     }
@@ -166,7 +167,7 @@ impl Broad {
             let (lo, hi) = b.bounds();
             bmin = bmin.inf(&lo);
             bmax = bmax.sup(&hi);
-            len_sum += s.lane.len2.sqrt();
+            len_sum += f64::from(s.lane.len2).sqrt();
         }
         let extent = bmax - bmin;
         let mut grid = GridInfo {
@@ -265,7 +266,7 @@ crate::simd::dispatch::multiversion! {
         broad: &Broad,
         cells: Range<usize>,
         p: &ContactParams,
-        eps2: f64,
+        eps2: f32,
         out: &mut Vec<Contact>,
         loads: &mut [f64],
     ) -> PairStats {
@@ -308,13 +309,13 @@ crate::simd::dispatch::multiversion! {
                         }
                         stats.tested += 1;
                         // Cell lists are ascending: `a` has the lower index, as `contact` wants.
-                        batched.push((boxes, pre), a, b, p, out);
+                        batched.push(pre, a, b, out);
                     }
                     at += RUN;
                 }
             }
         }
-        batched.flush((boxes, pre), p, out);
+        batched.flush(pre, out);
         stats.in_contact = (out.len() - before) as u32;
         stats
     }
@@ -436,7 +437,7 @@ mod tests {
                 &broad,
                 cells.clone(),
                 &p,
-                p.epsilon.powi(2),
+                (p.epsilon * p.epsilon) as f32,
                 &mut out,
                 &mut loads,
             );

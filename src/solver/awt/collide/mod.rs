@@ -24,14 +24,21 @@
 //!
 //! # Choices where the papers leave room
 //!
-//! * **Closest points in f64.** `parry3d` 0.25 is f32-only (`parry3d-f64` is a separate crate we do
-//!   not depend on), while positions are f64 and hair radii are sub-millimetre, so
-//!   [`closest_segment_params`] is Ericson's routine (the one parry uses in
-//!   `closest_points_segment_segment_with_locations_nD`) rewritten in f64 with relative epsilons.
-//!   A test compares it with parry on random segments. Parameters are reported as `s`, the weight of
-//!   the CHILD node (`P = (1 − s)·N_parent + s·N_child`), i.e. the paper's `u` is `1 − s`. For
-//!   (near-)parallel axes the closest points are not unique; we take the middle of the overlap of
-//!   the two segments (parry takes an end), so friction between parallel wisps — the common case —
+//! * **Closest points in f32, eight pairs at a time.** The closest points are Ericson's routine
+//!   (the one `parry3d` uses in `closest_points_segment_segment_with_locations_nD`), written
+//!   twice bit for bit: in eight `f32` lanes (`crate::simd::pairs`) and as the scalar
+//!   [`narrow::contact`] that the lanes hand their rare cases to. Since 2026-12-07 (evening)
+//!   the narrow phase works in `f32` (until then four `f64` lanes): twice the lanes and a
+//!   segment record of one cache line, for 1.2–1.3× on the stage (README, Performance). The
+//!   positions of a head of hair are within a metre or two of the origin, where `f32` rounds
+//!   to about 0.1 µm against wisp radii of a millimetre and more; a test compares the `f32`
+//!   closest points with the `f64` routine ([`closest_segment_params`], itself compared with
+//!   parry) to 1 µm. The thresholds that tell parallel and intersecting axes apart sit well
+//!   above that rounding (`crate::simd::pairs::{PARALLEL, INTERSECTING}`). Parameters are
+//!   reported as `s`, the weight of the CHILD node (`P = (1 − s)·N_parent + s·N_child`), i.e.
+//!   the paper's `u` is `1 − s`. For (near-)parallel axes (within about 0.6°) the closest
+//!   points are not unique or not well conditioned; we take the middle of the overlap of the
+//!   two segments (parry takes an end), so friction between parallel wisps — the common case —
 //!   is shared by both nodes instead of landing on one end.
 //! * **Which mass.** `k_f = α·m` and `R = k_r·m·(r − d)·n` with `m` the LIGHTER of the two child
 //!   masses: one coefficient serves both sides of the pair, and using the lighter one keeps
@@ -276,9 +283,9 @@ pub struct Contact {
     /// The second segment.
     pub b: u32,
     /// Closest points as fractions from parent (0) to child (1) on `a` and `b`.
-    pub s: f64,
+    pub s: f32,
     /// Closest-point parameter on the second segment.
-    pub t: f64,
+    pub t: f32,
     /// Friction (eq. 1) and repulsion (eq. 2) on `a`; `b` gets the opposite.
     pub friction: [f32; 3],
     /// Repulsion force on the first segment, N.

@@ -3,7 +3,7 @@
 use nalgebra::Vector3;
 
 use super::*;
-use crate::simd::pairs::Segment;
+use crate::simd::pairs::{PairParams, Segment, INTERSECTING, PARALLEL, TINY};
 
 #[inline]
 pub(super) fn widen(v: [f32; 3]) -> Vector3<f64> {
@@ -77,16 +77,13 @@ pub(super) fn adjacent(a: &SegBox, b: &SegBox) -> bool {
 }
 
 /// One segment's data for the relative-motion test and the closest points, gathered once per
-/// step: the narrow phase's [`Segment`] (what the batched lanes read) and the rest the scalar
-/// routine needs.
+/// step: the narrow phase's [`Segment`] in `f32`, one cache line (what the batched lanes read;
+/// `crate::simd::pairs` says why `f32`).
 #[derive(Clone, Copy)]
 pub(super) struct SegPre {
     /// Parent position `xp`, `d = xc − xp` and its squared length, the node velocities `vp`,
     /// `vc`, the radius and the child's mass.
     pub(super) lane: Segment,
-    pub(super) xc: Vector3<f64>,
-    /// Index in the [`SegmentsView`].
-    pub(super) seg: u32,
 }
 
 /// The batched narrow phase reads the [`Segment`] inside the record.
@@ -107,118 +104,203 @@ impl SegPre {
     ) -> Self {
         let (parent, child) = (segs.parent[i] as usize, segs.child[i] as usize);
         let (xp, xc) = (pos[parent], pos[child]);
-        let d = xc - xp;
         SegPre {
             lane: Segment::new(
                 xp.into(),
-                d.into(),
-                d.norm_squared(),
+                (xc - xp).into(),
                 vel[parent].into(),
                 vel[child].into(),
                 segs.radius[i],
                 segs.child_mass[i],
             ),
-            xc,
-            seg: i as u32,
         }
     }
+}
 
-    #[inline(always)]
-    pub(super) fn xp(&self) -> Vector3<f64> {
-        Vector3::from(self.lane.x)
+/// The narrow phase's parameters in `f32`, as the lanes and [`contact`] combine them.
+pub(super) fn pair_params(p: &ContactParams) -> PairParams {
+    PairParams {
+        friction: p.friction as f32,
+        repulsion: p.repulsion as f32,
+        cos2_threshold: (p.cos_angle_threshold * p.cos_angle_threshold) as f32,
+        dt_floor: p.dt.max(1e-12) as f32,
     }
-    #[inline(always)]
-    pub(super) fn vp(&self) -> Vector3<f64> {
-        Vector3::from(self.lane.vp)
+}
+
+/// `(u.x·v.x + u.y·v.y) + u.z·v.z`, as the lanes compute it.
+#[inline(always)]
+fn dot(u: &[f32; 3], v: &[f32; 3]) -> f32 {
+    (u[0] * v[0] + u[1] * v[1]) + u[2] * v[2]
+}
+
+/// `|u − v|²`.
+#[inline(always)]
+fn dist2(u: &[f32; 3], v: &[f32; 3]) -> f32 {
+    let w = [u[0] - v[0], u[1] - v[1], u[2] - v[2]];
+    dot(&w, &w)
+}
+
+/// `if y < x { y } else { x }` (the lanes' minimum; `f32::min` leaves the sign of a zero to
+/// the platform).
+#[inline(always)]
+fn min_sel(x: f32, y: f32) -> f32 {
+    if y < x {
+        y
+    } else {
+        x
     }
-    #[inline(always)]
-    pub(super) fn vc(&self) -> Vector3<f64> {
-        Vector3::from(self.lane.vc)
+}
+
+/// `if y > x { y } else { x }`.
+#[inline(always)]
+fn max_sel(x: f32, y: f32) -> f32 {
+    if y > x {
+        y
+    } else {
+        x
     }
 }
 
 /// Whether the two segments move relative to each other: a bound on every point-to-point
-/// relative speed (see the module docs) at or above `epsilon`.
+/// relative speed (see the module docs) at or above `epsilon` (`eps2 = ε²`).
 #[inline(always)]
-pub(super) fn moving(a: &SegPre, b: &SegPre, eps2: f64) -> bool {
-    // max(…) ≥ ε², one difference at a time (`f64::max` branches on NaN). Whenever the hair
-    // moves the first difference already decides, so the other three are skipped: with the
-    // four always computed (non-short-circuit `|`) the whole `interactions long short --motion
-    // shake` process took 1.04× as long (before ÷ after wall, median of 5 alternations,
-    // 2026-12-07; `long_curly --split 0.05`: 1.05×), and `lean`, where more pairs are at rest
-    // relative to each other, was unchanged (1.00×).
-    let (avp, avc, bvp, bvc) = (a.vp(), a.vc(), b.vp(), b.vc());
-    ((avp - bvp).norm_squared() >= eps2)
-        || ((avp - bvc).norm_squared() >= eps2)
-        || ((avc - bvp).norm_squared() >= eps2)
-        || ((avc - bvc).norm_squared() >= eps2)
+pub(super) fn moving(a: &SegPre, b: &SegPre, eps2: f32) -> bool {
+    // One difference at a time: whenever the hair moves the first difference already decides,
+    // so the other three are skipped. With the four always computed (non-short-circuit `|`)
+    // the whole `interactions long short --motion shake` process took 1.04× as long (before ÷
+    // after wall, median of 5 alternations, 2026-12-07; `long_curly --split 0.05`: 1.05×), and
+    // `lean`, where more pairs are at rest relative to each other, was unchanged (1.00×).
+    let (a, b) = (&a.lane, &b.lane);
+    dist2(&a.vp, &b.vp) >= eps2
+        || dist2(&a.vp, &b.vc) >= eps2
+        || dist2(&a.vc, &b.vp) >= eps2
+        || dist2(&a.vc, &b.vc) >= eps2
 }
 
-/// The contact of a pair that passed [`near`] and [`moving`], if the cylinders intersect. `a`
-/// must be the segment with the lower index, so that the grid and the reference compute
+/// The closest points of two segment axes (Ericson, *Real-Time Collision Detection* §5.1.9),
+/// in `f32`, as the lanes compute them: `x` the first points, `d` the directions, `la`, `le`
+/// their squared lengths. For (near-)parallel axes (see [`PARALLEL`]) `s` is the middle of the
+/// overlap.
+#[inline]
+pub(super) fn closest_params32(
+    xa: &[f32; 3],
+    da: &[f32; 3],
+    la: f32,
+    xb: &[f32; 3],
+    db: &[f32; 3],
+    le: f32,
+) -> (f32, f32) {
+    let r = [xa[0] - xb[0], xa[1] - xb[1], xa[2] - xb[2]];
+    let f = dot(db, &r);
+    // Relative to the pair: a segment shorter than 1e-6 of the other or of the gap is a point.
+    let scale = max_sel(max_sel(la, le), dot(&r, &r));
+    let tiny = TINY * scale;
+    if la <= tiny && le <= tiny {
+        return (0.0, 0.0);
+    }
+    if la <= tiny {
+        return (0.0, (f / le).clamp(0.0, 1.0));
+    }
+    let c = dot(da, &r);
+    if le <= tiny {
+        return ((-c / la).clamp(0.0, 1.0), 0.0);
+    }
+    let bb = dot(da, db);
+    let len2 = la * le;
+    let denom = len2 - bb * bb; // = |da × db|² ≥ 0
+                                // Parallel: seg 2's ends project on seg 1 at -c/a and (b - c)/a.
+    let (pp, qq) = (-c / la, (bb - c) / la);
+    let s = if denom > PARALLEL * len2 {
+        ((bb * f - c * le) / denom).clamp(0.0, 1.0)
+    } else {
+        let (lo, hi) = (max_sel(min_sel(pp, qq), 0.0), min_sel(max_sel(pp, qq), 1.0));
+        if lo <= hi {
+            0.5 * (lo + hi)
+        } else {
+            (0.5 * (pp + qq)).clamp(0.0, 1.0)
+        }
+    };
+    let t = (bb * s + f) / le;
+    if t < 0.0 {
+        (pp.clamp(0.0, 1.0), 0.0)
+    } else if t > 1.0 {
+        (qq.clamp(0.0, 1.0), 1.0)
+    } else {
+        (s, t)
+    }
+}
+
+/// The contact of segments `ia` < `ib` (records `a`, `b`) that passed [`near`] and
+/// [`moving`], if the cylinders intersect, in `f32` (`crate::simd::pairs` is its general case,
+/// bit for bit). The lower index comes first, so that the grid and the reference compute
 /// bit-identical pair forces.
 #[inline]
-pub(super) fn contact(a: &SegPre, b: &SegPre, p: &ContactParams) -> Option<Contact> {
-    let (seg_a, seg_b) = (a.seg, b.seg);
-    let (xpa, xca, xpb, xcb) = (a.xp(), a.xc, b.xp(), b.xc);
-    let (vpa, vca, vpb, vcb) = (a.vp(), a.vc(), b.vp(), b.vc());
+pub(super) fn contact(
+    a: &SegPre,
+    b: &SegPre,
+    (ia, ib): (u32, u32),
+    p: &PairParams,
+) -> Option<Contact> {
     let (a, b) = (&a.lane, &b.lane);
     let r = a.radius + b.radius;
-    let (d1, d2) = (Vector3::from(a.d), Vector3::from(b.d));
-    let (s, t) = closest_params(&xpa, &d1, a.len2, &xpb, &d2, b.len2);
-    let p1 = xpa + d1 * s;
-    let p2 = xpb + d2 * t;
-    let delta = p1 - p2;
-    let dist2 = delta.norm_squared();
+    let (s, t) = closest_params32(&a.x, &a.d, a.len2, &b.x, &b.d, b.len2);
+    let p1: [f32; 3] = std::array::from_fn(|k| a.x[k] + a.d[k] * s);
+    let p2: [f32; 3] = std::array::from_fn(|k| b.x[k] + b.d[k] * t);
+    let delta = [p1[0] - p2[0], p1[1] - p2[1], p1[2] - p2[2]];
+    let dist2 = dot(&delta, &delta);
     if dist2 >= r * r {
         return None;
     }
-    let m = a.mass.min(b.mass);
+    let m = min_sel(a.mass, b.mass);
 
     // Eq. 1: viscous friction at the closest points.
-    let v1 = vpa * (1.0 - s) + vca * s;
-    let v2 = vpb * (1.0 - t) + vcb * t;
-    let friction = (v2 - v1) * (p.friction * m);
-    let mut repulsion = Vector3::zeros();
+    let v1: [f32; 3] = std::array::from_fn(|k| a.vp[k] * (1.0 - s) + a.vc[k] * s);
+    let v2: [f32; 3] = std::array::from_fn(|k| b.vp[k] * (1.0 - t) + b.vc[k] * t);
+    let kfm = p.friction * m;
+    let friction = std::array::from_fn(|k| (v2[k] - v1[k]) * kfm);
+    let mut repulsion = [0.0; 3];
 
     // Eq. 2: repulsion only between wisps crossing at a large enough angle.
     // |cos| < threshold, compared squared (no root or division on the common parallel pair);
     // a zero-length segment counts as parallel (|cos| = 1).
     let len2 = a.len2 * b.len2;
-    let dot = d1.dot(&d2);
-    let thr = p.cos_angle_threshold;
+    let bb = dot(&a.d, &b.d);
     let crossing = if len2 > 0.0 {
-        dot * dot < thr * thr * len2
+        bb * bb < p.cos2_threshold * len2
     } else {
-        1.0 < thr
+        1.0 < p.cos2_threshold
     };
     if crossing {
         let d = dist2.sqrt();
-        let n = if d > 1e-9 * r {
-            delta / d
+        let n = if d > INTERSECTING * r {
+            delta.map(|x| x / d)
         } else {
-            let mid = (xpa + xca - xpb - xcb) * 0.5;
-            degenerate_normal(&d1, &d2, &mid)
+            // The difference of the closest points is rounding: the normal of the axes' plane.
+            let w = |v: [f32; 3]| Vector3::from(v.map(f64::from));
+            let (d1, d2) = (w(a.d), w(b.d));
+            let mid = (w(a.x) + d1 * 0.5) - (w(b.x) + d2 * 0.5);
+            narrow(&degenerate_normal(&d1, &d2, &mid))
         };
         // Only while the two approach: a penalty that also pushed separating wisps would, with
         // the skipping of still pairs (§4.1), chatter forever on resting hair and pump energy
         // into it. The response stays soft (§4.2) and never accelerates a separation.
         // It is also capped at the impulse that stops the approach within the step, so like
         // friction it can bring the normal relative velocity to zero but never reverse it.
-        let approach = -(v1 - v2).dot(&n);
+        let dv = [v1[0] - v2[0], v1[1] - v2[1], v1[2] - v2[2]];
+        let approach = -dot(&dv, &n);
         if approach > 0.0 {
-            let push = (p.repulsion * m * (r - d)).min(m * approach / p.dt.max(1e-12));
-            repulsion = n * push;
+            let push = min_sel(p.repulsion * m * (r - d), m * approach / p.dt_floor);
+            repulsion = n.map(|x| x * push);
         }
     }
 
     Some(Contact {
-        a: seg_a,
-        b: seg_b,
+        a: ia,
+        b: ib,
         s,
         t,
-        friction: narrow(&friction),
-        repulsion: narrow(&repulsion),
+        friction,
+        repulsion,
     })
 }
 
@@ -261,6 +343,7 @@ pub(super) fn any_perpendicular(u: &Vector3<f64>) -> Vector3<f64> {
 
 // The closest points of two segments are shared with the guide model's strips:
 // `crate::solver::common::{closest_segment_params, closest_params}`.
+#[cfg(test)]
 pub(super) use crate::solver::common::closest_params;
 pub use crate::solver::common::closest_segment_params;
 

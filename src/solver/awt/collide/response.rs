@@ -65,10 +65,10 @@ impl<'a> Response<'a> {
         let (a, b) = (c.a as usize, c.b as usize);
         let m = segs.child_mass[a].min(segs.child_mass[b]);
         for (n, share) in [
-            (segs.parent[a], 1.0 - c.s),
-            (segs.child[a], c.s),
-            (segs.parent[b], 1.0 - c.t),
-            (segs.child[b], c.t),
+            (segs.parent[a], 1.0 - f64::from(c.s)),
+            (segs.child[a], f64::from(c.s)),
+            (segs.parent[b], 1.0 - f64::from(c.t)),
+            (segs.child[b], f64::from(c.t)),
         ] {
             self.load[n as usize] += share * m * self.inv_mass[n as usize];
         }
@@ -187,10 +187,10 @@ fn add_contact(
     let rs = rep[pa].min(rep[ca]).min(rep[pb]).min(rep[cb]);
     let f = widen(c.friction) * fs + widen(c.repulsion) * rs;
     // Eq. 3: F at P = (1 − s)·N_p + s·N_c goes (1 − s)·F to the parent, s·F to the child.
-    let fa_child = f * c.s;
+    let fa_child = f * f64::from(c.s);
     force[pa] += f - fa_child;
     force[ca] += fa_child;
-    let fb_child = f * c.t;
+    let fb_child = f * f64::from(c.t);
     force[pb] -= f - fb_child;
     force[cb] -= fb_child;
 }
@@ -216,10 +216,10 @@ fn add_contact_scaled(c: &Contact, seg_scale: &[SegScale], force: &mut [Vector3<
     let rs = sa.rep.min(sb.rep);
     let f = widen(c.friction) * fs + widen(c.repulsion) * rs;
     // Eq. 3, as in `add_contact`.
-    let fa_child = f * c.s;
+    let fa_child = f * f64::from(c.s);
     force[pa] += f - fa_child;
     force[ca] += fa_child;
-    let fb_child = f * c.t;
+    let fb_child = f * f64::from(c.t);
     force[pb] -= f - fb_child;
     force[cb] -= fb_child;
 }
