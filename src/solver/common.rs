@@ -44,7 +44,8 @@ pub fn wind_at(p: &SimParams, x: &Vector3<f64>, t: f64) -> Vector3<f64> {
 /// Closest points between segments `[a1, b1]` and `[a2, b2]` (Ericson, *Real-Time Collision
 /// Detection* §5.1.9, as in parry), in f64. Returns `(s, t)` with the closest points
 /// `a1 + s·(b1 − a1)` and `a2 + t·(b2 − a2)`, both in `[0, 1]`. For parallel overlapping segments
-/// `s` is the middle of the overlap.
+/// `s` is the middle of the overlap. Always inlined, as [`closest_params`].
+#[inline(always)]
 pub fn closest_segment_params(
     a1: &Vector3<f64>,
     b1: &Vector3<f64>,
@@ -57,8 +58,9 @@ pub fn closest_segment_params(
 }
 
 /// [`closest_segment_params`] from the first points, the directions `d = b − a` and their squared
-/// lengths (computed once per segment by the caller).
-#[inline]
+/// lengths (computed once per segment by the caller). Always inlined, so that callers built for
+/// AVX2 (`crate::simd::dispatch`) compile it with them instead of calling the baseline copy.
+#[inline(always)]
 pub fn closest_params(
     a1: &Vector3<f64>,
     d1: &Vector3<f64>,

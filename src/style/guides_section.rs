@@ -35,7 +35,7 @@ pub struct GuideParams {
     /// step). The paper gives no time step; what needs a short one here is integrated
     /// implicitly (the joint actuators in the articulated-body step, the damping of drag,
     /// links and contacts by backward Euler per vertex), and a guide whose joint would turn
-    /// fast splits its own sub-step (into up to 128 pieces), so one holds the stability tests
+    /// fast splits its own sub-step (into up to 512 pieces), so one holds the stability tests
     /// and the paper's experiments (`chang-shake`, `chang-fig6`, `chang-fig7`) as two and four
     /// did, with half the contact evaluations of two and a broad phase that searches only the
     /// contact distance (the contacts are evaluated on the positions it searched): the guides'

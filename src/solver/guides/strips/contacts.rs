@@ -559,7 +559,7 @@ pub(super) struct TrianglePre {
 }
 
 impl TrianglePre {
-    #[inline]
+    #[inline(always)]
     pub(super) fn new(t: &[Vector3<f64>; 3]) -> TrianglePre {
         let (a, b, c) = (t[0], t[1], t[2]);
         TrianglePre {
@@ -571,8 +571,9 @@ impl TrianglePre {
         }
     }
 
-    /// [`closest_on_triangle`].
-    #[inline]
+    /// [`closest_on_triangle`]. Always inlined, so that the pieces built for AVX2
+    /// (`crate::simd::dispatch`) compile it with them instead of calling the baseline copy.
+    #[inline(always)]
     pub(super) fn closest(&self, p: &Vector3<f64>) -> (Vector3<f64>, [f64; 3]) {
         let TrianglePre { a, b, c, ab, ac } = *self;
         let ap = p - a;

@@ -479,6 +479,7 @@ fn tangent(chains: &Chains, v: usize) -> Vector3<f64> {
 
 /// Parameters `(s, t)` of the closest points of segments `p1p2` and `q1q2`: the AWT
 /// collider's exact test (Ericson, *Real-Time Collision Detection*, §5.1.9), shared.
+#[inline(always)]
 pub fn closest_segments(
     p1: &Vector3<f64>,
     p2: &Vector3<f64>,
