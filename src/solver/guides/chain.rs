@@ -390,6 +390,8 @@ fn cross_force(v: &Vector6<f64>, f: &Vector6<f64>) -> Vector6<f64> {
 }
 
 /// Spatial inertia at the origin of a point mass `m` at `c` with isotropic inertia `j` about it.
+/// Always inlined, so that the guides' runs built for AVX2 compile it with them.
+#[inline(always)]
 fn inertia(m: f64, j: f64, c: &Vector3<f64>) -> Matrix6<f64> {
     let cx = skew(c);
     let mut out = Matrix6::zeros();

@@ -365,6 +365,8 @@ pub(super) struct Prism {
 }
 
 impl Prism {
+    /// Always inlined, so that the pieces built for AVX2 compile it with them.
+    #[inline(always)]
     pub(super) fn new(t: &[Vector3<f64>; 3]) -> Prism {
         let (ab, ac) = (t[1] - t[0], t[2] - t[0]);
         let cross = ab.cross(&ac);
