@@ -317,7 +317,7 @@ fn overlap8(a: &[f32; 6], boxes: &[Vec<f32>; 6], i: usize) -> u32 {
 
 /// The box `lo..hi` in `f32` rounded outwards (low x, y, z, high x, y, z), as the lanes test it:
 /// it holds every point of the `f64` box.
-#[inline]
+#[inline(always)]
 pub(super) fn f32_box(lo: &Vector3<f64>, hi: &Vector3<f64>) -> [f32; 6] {
     [
         f32_down(lo.x),
