@@ -8,8 +8,8 @@ use crate::simd::pairs::{self, PairOut, PairParams, BATCH};
 
 use super::*;
 
-/// One segment's node slots and their `1 / mass` (see [`Broad`]), for the loads of its
-/// contacts.
+/// One segment's node slots, their `1 / mass` (see [`Broad`]) and its child's mass, for the
+/// loads of its contacts.
 #[derive(Clone, Copy, Default)]
 pub(super) struct SegEnds {
     pub(super) parent: u32,
@@ -20,7 +20,7 @@ pub(super) struct SegEnds {
     pub(super) mass: f64,
 }
 
-/// Queued pairs and the lanes' results; lives on the searching thread's stack (about 5 kB).
+/// Queued pairs and the lanes' results; lives on the searching thread's stack (about 3 kB).
 ///
 /// Each contact found also adds its shares to the per-node loads of [`Response`] at once,
 /// while its data is still in the cache (a second pass over the contact list, tens of
