@@ -89,7 +89,6 @@ impl<'a> Batched<'a> {
     }
 
     fn emit(&mut self, n: usize, pre: &[SegPre], out: &mut Vec<Contact>) {
-        let o_params = self.params;
         let mut todo = self.out.hit | self.out.rare;
         while todo != 0 {
             let o = &self.out;
@@ -98,7 +97,7 @@ impl<'a> Batched<'a> {
             debug_assert!(i < n);
             let (a, b) = self.ids[i];
             let c = if o.rare >> i & 1 != 0 {
-                match contact(&pre[a as usize], &pre[b as usize], (a, b), &o_params) {
+                match contact(&pre[a as usize], &pre[b as usize], (a, b), &self.params) {
                     Some(c) => c,
                     None => continue,
                 }

@@ -27,7 +27,7 @@
 //! * **Closest points in f32, eight pairs at a time.** The closest points are Ericson's routine
 //!   (the one `parry3d` uses in `closest_points_segment_segment_with_locations_nD`), written
 //!   twice bit for bit: in eight `f32` lanes (`crate::simd::pairs`) and as the scalar
-//!   [`narrow::contact`] that the lanes hand their rare cases to. Since 2026-12-07 (evening)
+//!   [`narrow::contact`] that the lanes hand their rare cases to. Since 2026-12-07 (night)
 //!   the narrow phase works in `f32` (until then four `f64` lanes): twice the lanes and a
 //!   segment record of one cache line, for 1.2–1.3× on the stage (README, Performance). The
 //!   positions of a head of hair are within a metre or two of the origin, where `f32` rounds
