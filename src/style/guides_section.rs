@@ -49,8 +49,8 @@ pub struct GuideParams {
     /// `contact_search_every − 1` steps). The paper does not say how often its strips are
     /// searched. Default 2: the search is about two thirds of the strips' cost, and with 2 the
     /// paper's experiments and the stability tests hold as with 1; under `shake`, where a
-    /// third of a step's contacts can be new, 12–20 % fewer contacts act per step (README,
-    /// Performance, 2026-12-07). 1 searches every step, as before.
+    /// third of a step's contacts can be new, 12–20 % fewer contacts act per step
+    /// (`docs/performance-history.md`, 2026-12-07). 1 searches every step, as before.
     #[serde(default = "d_contact_search_every")]
     pub contact_search_every: u32,
     /// Joint actuator stiffness (§3.2), s⁻²: the spring of a joint is this times the rest

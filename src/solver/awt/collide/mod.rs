@@ -29,8 +29,9 @@
 //!   twice bit for bit: in eight `f32` lanes (`crate::simd::pairs`) and as the scalar
 //!   [`narrow::contact`] that the lanes hand their rare cases to. Since 2026-12-07 (night)
 //!   the narrow phase works in `f32` (until then four `f64` lanes): twice the lanes and a
-//!   segment record of one cache line, for 1.2–1.3× on the stage (README, Performance). The
-//!   positions of a head of hair are within a metre or two of the origin, where `f32` rounds
+//!   segment record of one cache line, for 1.2–1.3× on the stage
+//!   (`docs/performance-history.md`). The positions of a head of hair are within a metre or
+//!   two of the origin, where `f32` rounds
 //!   to about 0.1 µm against wisp radii of a millimetre and more; a test compares the `f32`
 //!   closest points with the `f64` routine ([`closest_segment_params`], itself compared with
 //!   parry) to 1 µm. The thresholds that tell parallel and intersecting axes apart sit well
@@ -93,7 +94,7 @@
 //!   Under `shake` on `long` (3 s, one thread) a call visits 2.9–3.3 M entry pairs, of which
 //!   1.1–1.3 M pass the mask, 0.6 M the boxes and 0.3 M the relative-motion test.
 //!   2026-12-07, the stage alone on one thread against the build before: a few per cent
-//!   (after ÷ before medians 0.91–0.99 by style; README's Performance section has the
+//!   (after ÷ before medians 0.91–0.99 by style; `docs/performance-history.md` has the
 //!   figures). Tried then and not landed: queuing every pair whose boxes overlap and counting
 //!   it only if it passes [`adjacent`] and [`moving`], so as not to branch on the latter (a
 //!   coin toss under `shake`): 1.13–1.29× slower on `long`, since each queue slot's address
@@ -151,6 +152,13 @@
 //!   lanes, writing the contact with its loads and the response. Tried, not landed:
 //!   - segments numbered chain by chain (so that the entries of a cell that follow each
 //!     other are often one wisp's consecutive segments, side by side in memory): 0.93×;
+//!     tried again on 2026-12-07 (night) in the whole pipeline (`wisptree bench --live
+//!     --rows "awt long"`, alternated three times): 0.96× (median of 84 pairs of rows).
+//!     Numbered cross-section by cross-section, as gathered, the wisps that share a cell
+//!     are near one another in each cross-section's run of slots too;
+//!   - the response's contact loop built for AVX2 (its `f64` triples in three-operand
+//!     instructions instead of SSE2 shuffles), 2026-12-07 (night): 1.00× (median of six
+//!     alternations);
 //!   - the grid holding pieces of four consecutive segments of one chain instead of
 //!     segments, each pair of overlapping pieces filtering its 4 × 4 segment pairs at once
 //!     (boxes, adjacency and relative motion without a branch): 0.81×. On `long` at 2 s a
