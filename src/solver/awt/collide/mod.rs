@@ -161,8 +161,8 @@
 //!     alternations);
 //!   - [`Contact`] records of 28 bytes instead of 40, the repulsion (6–19 % of the contacts
 //!     under `shake`: 6 % on `long_curly` at split 0.05, 19 % on `long`) kept in a side list
-//!     by contact index, the same forces bit for bit, 2026-12-07 (night): no faster (per-call
-//!     medians of five alternations within ±3 % on `long_curly` at split 0.05, 0.95× and
+//!     by contact index, the same forces bit for bit, 2026-12-07 (night): no faster (per call,
+//!     five alternations: 1.00× within ±4 % on `long_curly` at split 0.05, medians 0.95× and
 //!     0.93× on `long` and `short`). The contact list is larger than the L3 cache there,
 //!     but writing and reading it back is not what the stage waits on;
 //!   - the grid holding pieces of four consecutive segments of one chain instead of
