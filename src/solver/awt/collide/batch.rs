@@ -1,8 +1,8 @@
 //! The batched narrow phase: the pairs that pass the cheap filters are queued as index pairs
-//! and tested [`BATCH`] at a time by `crate::simd::pairs` (eight `f32` lanes at once, read straight
-//! from the [`SegPre`] records), which finds the same contacts with the same forces as
-//! [`contact`], bit for bit; the few pairs outside its general case are handed back and done by
-//! [`contact`] itself.
+//! and tested [`BATCH`] at a time by `crate::simd::pairs` (eight `f32` lanes at once, read
+//! straight from the [`SegPre`] records), which finds the same contacts with the same forces
+//! as [`contact`], bit for bit; the few pairs outside its general case are handed back and
+//! done by [`contact`] itself.
 
 use crate::simd::pairs::{self, PairOut, PairParams, BATCH};
 

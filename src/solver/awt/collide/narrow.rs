@@ -207,8 +207,9 @@ pub(super) fn closest_params32(
     }
     let bb = dot(da, db);
     let len2 = la * le;
-    let denom = len2 - bb * bb; // = |da × db|² ≥ 0
-                                // Parallel: seg 2's ends project on seg 1 at -c/a and (b - c)/a.
+    // `|da × db|² ≥ 0`.
+    let denom = len2 - bb * bb;
+    // Parallel: seg 2's ends project on seg 1 at -c/a and (b - c)/a.
     let (pp, qq) = (-c / la, (bb - c) / la);
     let s = if denom > PARALLEL * len2 {
         ((bb * f - c * le) / denom).clamp(0.0, 1.0)
