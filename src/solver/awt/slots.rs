@@ -42,6 +42,8 @@ pub struct Slots {
     pub pre_body: Vec<Vector3<f64>>,
     /// Touched by the body this step.
     pub contact: Vec<bool>,
+    /// Scratch of the rigid-link projection: `1 / mass`, 0 for a root (which no link moves).
+    pub link_weight: Vec<f64>,
     /// Segments (non-root slots) for the collider.
     pub segs: Segments,
 }
@@ -120,6 +122,7 @@ impl Slots {
         self.rest_len.reserve(n);
         self.pre_body.reserve(n);
         self.contact.reserve(n);
+        self.link_weight.reserve(n);
         self.segs.reserve(n);
     }
 
@@ -149,6 +152,7 @@ impl Slots {
         self.rest_len.clear();
         self.pre_body.clear();
         self.contact.clear();
+        self.link_weight.clear();
         self.segs.clear();
     }
 }

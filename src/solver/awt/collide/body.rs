@@ -50,6 +50,9 @@ pub fn resolve_body(
         for _ in 0..BODY_PASSES {
             let mut changed = false;
             for s in spheres {
+                if clear_of(&parent, &child, s) {
+                    continue;
+                }
                 if let Some(c) = push_out(&parent, &child, s) {
                     child = c;
                     changed = true;
@@ -71,6 +74,22 @@ pub fn resolve_body(
         }
     }
     pushed
+}
+
+/// Whether the segment `parent → child` surely stays out of `s`: its bounding box is farther
+/// than the radius from the centre, by a relative margin far above the rounding of
+/// [`push_out`]'s own tests, so [`push_out`] would return `None`. Most segments are far from
+/// most spheres, and this test costs a third of [`push_out`]'s.
+#[inline]
+fn clear_of(parent: &Vector3<f64>, child: &Vector3<f64>, s: &BodySphere) -> bool {
+    let mut d2 = 0.0;
+    for k in 0..3 {
+        let (lo, hi) = (parent[k].min(child[k]), parent[k].max(child[k]));
+        let c = s.center[k];
+        let gap = (lo - c).max(c - hi).max(0.0);
+        d2 += gap * gap;
+    }
+    d2 > s.radius * s.radius * (1.0 + 1e-6)
 }
 
 #[inline]
@@ -199,4 +218,62 @@ pub fn resolve_shapes(
         }
     }
     pushed
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The cheap box test never skips a segment [`push_out`] would move: on random segments
+    /// around a sphere, many of them grazing it (tangent within a relative 1e-7, either side),
+    /// every segment it calls clear is one `push_out` leaves alone.
+    #[test]
+    fn clear_segments_are_never_pushed() {
+        let mut seed = 0x2545_f491_4f6c_dd1du64;
+        let mut rand = || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let s = BodySphere {
+            center: Vector3::new(0.1, 1.4, -0.02),
+            radius: 0.07,
+        };
+        let (mut clear, mut pushed) = (0, 0);
+        for k in 0..200_000 {
+            let mut unit = || {
+                Vector3::new(rand() - 0.5, rand() - 0.5, rand() - 0.5)
+                    .try_normalize(1e-9)
+                    .unwrap_or_else(Vector3::x)
+            };
+            let (u, w) = (unit(), unit());
+            let (parent, child) = if k % 2 == 0 {
+                // Anywhere within three radii.
+                let p = s.center + u * (3.0 * s.radius * rand());
+                (p, p + w * (0.05 * rand()))
+            } else {
+                // Grazing, along a coordinate axis (so that the segment is its own box): its
+                // point nearest the centre is the radius away within a relative 1e-7.
+                let axis = Vector3::ith((k / 2) % 3, 1.0);
+                let u = (u - axis * u.dot(&axis)).try_normalize(1e-9).unwrap_or(w);
+                let q = s.center + u * (s.radius * (1.0 + 2e-7 * (rand() - 0.5)));
+                let a = 0.03 * rand();
+                (q - axis * a, q + axis * (0.03 * rand()))
+            };
+            let moved = push_out(&parent, &child, &s).is_some();
+            if clear_of(&parent, &child, &s) {
+                clear += 1;
+                assert!(
+                    !moved,
+                    "skipped a segment push_out moves: {parent:?} → {child:?}"
+                );
+            }
+            pushed += moved as u32;
+        }
+        assert!(
+            clear > 50_000 && pushed > 10_000,
+            "{clear} clear, {pushed} pushed"
+        );
+    }
 }

@@ -42,8 +42,9 @@ impl GridInfo {
     pub fn cell_of(&self, p: &Vector3<f64>) -> [u32; 3] {
         let mut c = [0u32; 3];
         for k in 0..3 {
-            let f = ((p[k] - self.origin[k]) / self.cell_size).floor();
-            // `as` saturates (NaN → 0), the min keeps the cell inside the grid.
+            let f = (p[k] - self.origin[k]) / self.cell_size;
+            // `as` truncates, which is the floor from 0 up (and `floor` is a libm call in the
+            // baseline build), and saturates (NaN → 0); the min keeps the cell inside the grid.
             c[k] = (f.max(0.0) as u32).min(self.dims[k].saturating_sub(1));
         }
         c
