@@ -169,7 +169,31 @@ fn bench_live_quick_has_every_solver_style_motion_the_slider_ends_and_rendering_
         let awt = r["solver"] == "awt";
         assert_eq!(r["split"].is_number(), awt, "{r}");
         assert_eq!(r["merge"].is_number(), awt, "{r}");
+        // Where an AWT step's time goes: every stage timed, the hair–hair pairs by far the
+        // largest under `shake` at the lowest split threshold (thousands of active segments);
+        // the other models time no stages.
+        let stages = &r["stages_ms"];
+        assert_eq!(stages.is_object(), awt, "{r}");
+        if awt {
+            let ms = |k: &str| stages[k].as_f64().unwrap_or_else(|| panic!("no {k}: {r}"));
+            let named = [
+                "forces",
+                "integrate",
+                "links",
+                "obstacles",
+                "adapt",
+                "follow",
+            ];
+            assert!(ms("interactions") > 0.0 && ms("other") >= 0.0, "{r}");
+            if r["motion"] == "shake" && r["split"].as_f64() == Some(0.05) {
+                assert!(named.iter().all(|&k| ms(k) < ms("interactions")), "{r}");
+            }
+        }
     }
+    assert!(
+        stdout.contains("where a step's") && stdout.contains("interactions"),
+        "the slowest AWT row's stages: {stdout}"
+    );
     let key = |r: &serde_json::Value| {
         (
             r["solver"].as_str().unwrap().to_owned(),

@@ -13,6 +13,7 @@ use super::stop::StopSignal;
 use crate::frame::Frame;
 use crate::pipeline::{self, FrameBuilder};
 use crate::report::tempo::{RealtimeMeter, Tempo, SLOW_BELOW};
+use crate::report::StageTimes;
 use crate::scene::Scene;
 use crate::solver::tunable::{self, Tuning};
 use crate::solver::Solver;
@@ -76,6 +77,12 @@ pub struct Load {
     pub active_max: u32,
     /// Sum over frames of the segment pairs in contact per step.
     pub contacts_per_step_sum: f64,
+    /// Steps taken, and the wall time of their `step` calls (what the stage times divide).
+    pub steps: u64,
+    /// See `steps`.
+    pub step_wall: Duration,
+    /// The steps' time in each stage (zero for solvers that do not time their stages).
+    pub stages: StageTimes,
 }
 
 impl Load {
@@ -86,6 +93,10 @@ impl Load {
         self.active_max = self.active_max.max(active);
         self.contacts_per_step_sum +=
             f64::from(f.counters.pairs_in_contact) / steps_per_frame.max(1) as f64;
+        let steps = steps_per_frame.max(1) as u64;
+        self.steps += steps;
+        self.step_wall += Duration::from_secs_f64(f.step_ms.max(0.0) * 1e-3 * steps as f64);
+        self.stages.add(&f.counters.times);
     }
 
     /// Mean active nodes (guides, wisp points) per frame.

@@ -26,6 +26,7 @@ use crate::solver::SolverKind;
 use crate::stream::sink::Recording;
 use crate::style::builtin::StyleSource;
 
+use super::steps::StageMs;
 use super::style_label;
 use crate::error::BadInput;
 
@@ -75,6 +76,9 @@ pub struct LiveRow {
     pub frames: u64,
     /// A frame's simulated length, ms (the factor's numerator per frame).
     pub frame_ms: f64,
+    /// Where a step's wall time went, mean ms per step by stage of the AWT's step (`null`
+    /// for solvers that do not time their stages), from the pass whose factor is the median.
+    pub stages_ms: Option<StageMs>,
 }
 
 /// What one row runs.
@@ -224,10 +228,17 @@ pub fn bench_live(
 pub fn combine_passes(passes: Vec<LiveRow>) -> LiveRow {
     let factors: Vec<f64> = passes.iter().map(|r| r.realtime_factor).collect();
     let p95: Vec<f64> = passes.iter().map(|r| r.p95_frame_ms).collect();
+    // The stage times of the median pass (the lower middle one for an even count).
+    let mut order: Vec<usize> = (0..passes.len()).collect();
+    order.sort_by(|&a, &b| factors[a].total_cmp(&factors[b]));
+    let stages_ms = order
+        .get((order.len().max(1) - 1) / 2)
+        .and_then(|&k| passes[k].stages_ms);
     let mut row = passes
         .into_iter()
         .next()
         .expect("a row has at least one pass");
+    row.stages_ms = stages_ms;
     row.realtime_factor = median(&factors);
     row.p95_frame_ms = median(&p95);
     row.realtime_factors = factors;
@@ -333,6 +344,11 @@ fn run_case(
         sim_seconds: tempo.sim_s,
         frames: tempo.frames,
         frame_ms: tempo.sim_s * 1e3 / tempo.frames as f64,
+        stages_ms: {
+            let load = &summary.load;
+            (load.stages.total() > std::time::Duration::ZERO)
+                .then(|| StageMs::from_sums(&load.stages, load.step_wall, load.steps as usize))
+        },
     })
 }
 
@@ -379,6 +395,9 @@ pub fn print_live(rows: &[LiveRow], seconds: f64) {
             print_row(w);
         }
     }
+    if let Some(w) = worst(rows.iter().filter(|r| r.stages_ms.is_some())) {
+        print_stages(w);
+    }
     if let Some(w) = worst(rows.iter()) {
         println!();
         println!(
@@ -397,6 +416,31 @@ pub fn print_live(rows: &[LiveRow], seconds: f64) {
             }
         );
     }
+}
+
+/// Where the step's time goes in row `w` (the slowest of those that time their stages):
+/// what to speed up first, or why a row stays slow.
+fn print_stages(w: &LiveRow) {
+    let Some(st) = w.stages_ms else {
+        return;
+    };
+    let total: f64 = st.entries().iter().map(|e| e.1).sum();
+    let parts: Vec<String> = st
+        .entries()
+        .iter()
+        .filter(|e| e.1 >= 0.005)
+        .map(|(name, ms)| format!("{name} {ms:.2} ({:.0} %)", 100.0 * ms / total.max(1e-12)))
+        .collect();
+    println!();
+    println!(
+        "where a step's {total:.2} ms go in the slowest {} row ({} {}{}{}): {}",
+        w.solver,
+        w.style,
+        w.motion,
+        w.split.map_or(String::new(), |v| format!(" split {v}")),
+        w.merge.map_or(String::new(), |v| format!(" merge {v}")),
+        parts.join(", ")
+    );
 }
 
 fn worst<'a>(rows: impl Iterator<Item = &'a LiveRow>) -> Option<&'a LiveRow> {
@@ -479,6 +523,11 @@ mod tests {
             sim_seconds: 5.0,
             frames: 125,
             frame_ms: 40.0,
+            // Tagged by the pass's frame time, to tell the passes apart.
+            stages_ms: Some(StageMs {
+                interactions: p95,
+                ..StageMs::default()
+            }),
         }
     }
 
@@ -491,6 +540,8 @@ mod tests {
         assert_eq!(three.p95_frame_ms, 45.0);
         assert_eq!(three.realtime_factors, [1.5, 0.9, 1.2]);
         assert_eq!((three.mean_active, three.max_active), (2585.0, 3584));
+        // The stage times of the pass whose factor is the median.
+        assert_eq!(three.stages_ms.unwrap().interactions, 45.0);
         let four = combine_passes(vec![
             row(1.0, 10.0),
             row(4.0, 40.0),
@@ -499,6 +550,11 @@ mod tests {
         ]);
         assert_eq!(four.realtime_factor, 2.5);
         assert_eq!(four.p95_frame_ms, 25.0);
+        assert_eq!(
+            four.stages_ms.unwrap().interactions,
+            20.0,
+            "the lower middle pass"
+        );
     }
 
     #[test]

@@ -176,7 +176,18 @@
 //!   - the lanes reading the velocities and masses only once the closest points are known:
 //!     0.96× (0.93–1.03);
 //!   - the first segment's velocities read once per entry instead of once per pair in the
-//!     candidate loop: 1.04× and 1.01× in two series, within the machine's noise.
+//!     candidate loop: 1.04× and 1.01× in two series, within the machine's noise;
+//!   - the AVX2 builds compiled with AVX-512 enabled too (this machine's processor has it:
+//!     32 vector registers, compares into mask registers, the same bits), 2026-12-08:
+//!     `interactions long long_curly --motion shake --split 0.05`, one thread, alternated
+//!     three times, no change (per call 11.3–12.2 ms before, 11.8–14.0 ms after on `long`;
+//!     31.0–34.9 and 32.3–33.7 ms on `long_curly`);
+//!   - the response and the loads keeping the first segment's two node sums in registers
+//!     while consecutive contacts share that segment (stored once per run instead of each
+//!     contact waiting for the previous one's store; the same additions in the same order,
+//!     so the same bits), 2026-12-08, same runs, alternated four times: no change (`long`
+//!     11.3–12.1 ms before, 11.7–12.5 after; `long_curly` 31.1–32.6 and 31.6–32.3).
+//!     The store-to-load chains are not what the response waits on either.
 //!
 //!   What did pay: [`moving`] stopping at the first velocity difference that passes
 //!   (1.04–1.05× under `shake`, see there).
