@@ -58,7 +58,9 @@ pub struct BenchArgs {
     /// every --models style under every motion preset, the AWT at the page's slider ends under
     /// `shake`, and the AWT with rendering on. Prints each row's real-time factor (simulated ÷
     /// wall seconds: under 1 is slow motion), 95th-percentile frame time, active nodes and
-    /// contacts, the worst row last (JSON key "live"). 5 s simulated per row, 1 with --quick.
+    /// contacts, then where a step's time goes in the slowest AWT row (ms per stage; every AWT
+    /// row's in the JSON), the worst row last (JSON key "live"). 5 s simulated per row, 1 with
+    /// --quick.
     #[arg(long, conflicts_with = "render")]
     pub live: bool,
     /// With --live: run only the rows whose label contains one of these comma-separated texts.
