@@ -401,12 +401,11 @@ pub fn print_live(rows: &[LiveRow], seconds: f64) {
     if let Some(w) = worst(rows.iter()) {
         println!();
         println!(
-            "worst of all: {} on {} under `{}`{}{}{}: ×{:.2} of real time{}",
+            "worst of all: {} on {} under `{}`{}{}: ×{:.2} of real time{}",
             w.solver,
             w.style,
             w.motion,
-            w.split.map_or(String::new(), |v| format!(", split {v}")),
-            w.merge.map_or(String::new(), |v| format!(", merge {v}")),
+            thresholds(w, ", "),
             if w.render { ", rendering" } else { "" },
             w.realtime_factor,
             if w.realtime_factor >= 1.0 {
@@ -433,14 +432,20 @@ fn print_stages(w: &LiveRow) {
         .collect();
     println!();
     println!(
-        "where a step's {total:.2} ms go in the slowest {} row ({} {}{}{}): {}",
+        "where a step's {total:.2} ms go in the slowest {} row ({} {}{}): {}",
         w.solver,
         w.style,
         w.motion,
-        w.split.map_or(String::new(), |v| format!(" split {v}")),
-        w.merge.map_or(String::new(), |v| format!(" merge {v}")),
+        thresholds(w, " "),
         parts.join(", ")
     );
+}
+
+/// The row's AWT thresholds as ` split X merge Y`, each item after `sep` (empty for the
+/// models without them).
+fn thresholds(r: &LiveRow, sep: &str) -> String {
+    let item = |name: &str, v: Option<f64>| v.map_or(String::new(), |v| format!("{sep}{name} {v}"));
+    item("split", r.split) + &item("merge", r.merge)
 }
 
 fn worst<'a>(rows: impl Iterator<Item = &'a LiveRow>) -> Option<&'a LiveRow> {

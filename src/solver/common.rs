@@ -113,3 +113,15 @@ pub fn closest_params(
     }
     (s, t)
 }
+
+/// For tests: a seeded xorshift64 stream of uniform numbers in [0, 1) (no dependency, the same
+/// numbers on every machine).
+#[cfg(test)]
+pub(crate) fn uniform_stream(mut seed: u64) -> impl FnMut() -> f64 {
+    move || {
+        seed ^= seed << 13;
+        seed ^= seed >> 7;
+        seed ^= seed << 17;
+        (seed >> 11) as f64 / (1u64 << 53) as f64
+    }
+}

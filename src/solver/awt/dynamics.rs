@@ -404,13 +404,7 @@ mod tests {
     /// random points around a sphere and on points within a relative 1e-7 of its surface.
     #[test]
     fn surely_outside_agrees_with_the_exact_test() {
-        let mut seed = 0x9e37_79b9_7f4a_7c15u64;
-        let mut rand = || {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            (seed >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut rand = crate::solver::common::uniform_stream(0x9e37_79b9_7f4a_7c15);
         let s = BodySphere {
             center: Vector3::new(0.0, 1.25, -0.02),
             radius: 0.15,

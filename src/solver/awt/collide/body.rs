@@ -229,13 +229,7 @@ mod tests {
     /// every segment it calls clear is one `push_out` leaves alone.
     #[test]
     fn clear_segments_are_never_pushed() {
-        let mut seed = 0x2545_f491_4f6c_dd1du64;
-        let mut rand = || {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            (seed >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut rand = crate::solver::common::uniform_stream(0x2545_f491_4f6c_dd1d);
         let s = BodySphere {
             center: Vector3::new(0.1, 1.4, -0.02),
             radius: 0.07,

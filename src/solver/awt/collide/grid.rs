@@ -382,13 +382,8 @@ mod tests {
     /// every filter rejects some pairs.
     #[test]
     fn the_search_is_the_same_on_both_twins() {
-        let mut seed = 0x9e37_79b9_7f4a_7c15u64;
-        let mut rand = || {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-        };
+        let mut unit = crate::solver::common::uniform_stream(0x9e37_79b9_7f4a_7c15);
+        let mut rand = || unit() - 0.5;
         let (strands, nodes_per) = (80, 12);
         let (mut pos, mut vel) = (Vec::new(), Vec::new());
         let (mut parent, mut child, mut radius, mut mass, mut chain) =
