@@ -26,7 +26,11 @@ pub(super) const PARTS: usize = 2;
 /// helper descheduled in the middle of its half stalls the step. Worth it only where the
 /// response is milliseconds long: at the page's lowest split threshold (140–280 k contacts
 /// per step under `shake`), not at the styles' defaults (20–90 k). The forces do not depend on
-/// it (the halves are the same either way).
+/// it (the halves are the same either way). Tried 2026-12-08: sharing from 30 k on, against
+/// this, `bench --live --rows "awt long_curly shake,awt short_curly shake"` alternated five
+/// times: median 0.97 (0.73–1.40) over 60 pairs of rows, and no gain on the rows it changes
+/// (Short curly at its defaults, 32 k contacts, 0.89; Long curly, 89 k, 0.95; with rendering
+/// on 1.00 and 1.08).
 pub(super) const MIN_CONTACTS_TO_SHARE: usize = 100_000;
 
 /// One worker's contacts: the chunks it searched, and for each its span in `contacts`.
