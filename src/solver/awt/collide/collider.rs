@@ -16,7 +16,7 @@ use crate::simd::boxes::RUN;
 /// to 1.11 around 1, no change the noisy machine could show; it would also change the
 /// order in which the loads are summed, and with it the determinism hashes.) Tried again on
 /// 2026-12-08 with 32 chunks and the loads summed per thread in whole units of `2⁻³²` (integer
-/// sums, so that no cut changes the forces; a test checked it with 1 to 32 chunks on one and
+/// sums, so that no cut changes the forces; a test checked it with 1 to 31 chunks on one and
 /// two threads): the stage alone on two threads 1.08–1.15× faster at the styles' defaults
 /// under `shake` (`examples/interactions.rs long long_curly short --motion shake --threads
 /// 2`, three alternations), but not in the live pipeline, where each step's own timer gave
