@@ -191,7 +191,13 @@
 //!   - the response's part buffers padded to four `f64` per node (one load, add and store of
 //!     two SSE2 registers per node instead of three scalars, the same bits), 2026-12-08,
 //!     same runs, alternated three times: no change (`long` 12.1–13.1 ms before, 12.2–12.7
-//!     after; `long_curly` 32.5–34.8 and 33.4–34.4).
+//!     after; `long_curly` 32.5–34.8 and 33.4–34.4);
+//!   - the loads summed per segment end (two neighbouring `f64` per segment, the node's
+//!     `1 / mass` applied once per chunk afterwards) instead of per node: two cache lines
+//!     written per contact instead of four and no multiplication by the inverse masses,
+//!     2026-12-08, same runs plus `long short --motion shake`, alternated three times: no
+//!     change (`long_curly` 31.0–31.8 ms before, 31.1–31.5 after; `long` at its defaults
+//!     6.7–7.1 and 6.8–6.9).
 //!
 //!   Where the rest goes, by switching parts off (2026-12-08, same runs and states, one
 //!   thread, three alternations): without the response, `long_curly` 25.9–27.5 ms a call
