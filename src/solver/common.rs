@@ -125,3 +125,11 @@ pub(crate) fn uniform_stream(mut seed: u64) -> impl FnMut() -> f64 {
         (seed >> 11) as f64 / (1u64 << 53) as f64
     }
 }
+
+/// For tests: a random direction from a [`uniform_stream`] (uniform in a cube, normalised).
+#[cfg(test)]
+pub(crate) fn random_unit(rand: &mut impl FnMut() -> f64) -> nalgebra::Vector3<f64> {
+    nalgebra::Vector3::new(rand() - 0.5, rand() - 0.5, rand() - 0.5)
+        .try_normalize(1e-9)
+        .unwrap_or_else(nalgebra::Vector3::x)
+}

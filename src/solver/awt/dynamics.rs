@@ -399,21 +399,20 @@ pub fn update_accelerations(s: &mut Slots, dt: f64, smoothing: f64) {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::solver::common::{random_unit, uniform_stream};
 
     /// The squared-distance test says "outside" only where the exact `|x − c| ≥ r` does, on
     /// random points around a sphere and on points within a relative 1e-7 of its surface.
     #[test]
     fn surely_outside_agrees_with_the_exact_test() {
-        let mut rand = crate::solver::common::uniform_stream(0x9e37_79b9_7f4a_7c15);
+        let mut rand = uniform_stream(0x9e37_79b9_7f4a_7c15);
         let s = BodySphere {
             center: Vector3::new(0.0, 1.25, -0.02),
             radius: 0.15,
         };
         let (mut skipped, mut inside) = (0, 0);
         for k in 0..200_000 {
-            let u = Vector3::new(rand() - 0.5, rand() - 0.5, rand() - 0.5)
-                .try_normalize(1e-9)
-                .unwrap_or_else(Vector3::y);
+            let u = random_unit(&mut rand);
             let r = if k % 2 == 0 {
                 3.0 * s.radius * rand()
             } else {

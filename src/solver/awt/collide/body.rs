@@ -223,25 +223,21 @@ pub fn resolve_shapes(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::solver::common::{random_unit, uniform_stream};
 
     /// The cheap box test never skips a segment [`push_out`] would move: on random segments
     /// around a sphere, many of them grazing it (tangent within a relative 1e-7, either side),
     /// every segment it calls clear is one `push_out` leaves alone.
     #[test]
     fn clear_segments_are_never_pushed() {
-        let mut rand = crate::solver::common::uniform_stream(0x2545_f491_4f6c_dd1d);
+        let mut rand = uniform_stream(0x2545_f491_4f6c_dd1d);
         let s = BodySphere {
             center: Vector3::new(0.1, 1.4, -0.02),
             radius: 0.07,
         };
         let (mut clear, mut pushed) = (0, 0);
         for k in 0..200_000 {
-            let mut unit = || {
-                Vector3::new(rand() - 0.5, rand() - 0.5, rand() - 0.5)
-                    .try_normalize(1e-9)
-                    .unwrap_or_else(Vector3::x)
-            };
-            let (u, w) = (unit(), unit());
+            let (u, w) = (random_unit(&mut rand), random_unit(&mut rand));
             let (parent, child) = if k % 2 == 0 {
                 // Anywhere within three radii.
                 let p = s.center + u * (3.0 * s.radius * rand());

@@ -16,10 +16,11 @@ use crate::simd::boxes::RUN;
 /// to 1.11 around 1, no change the noisy machine could show; it would also change the
 /// order in which the loads are summed, and with it the determinism hashes.) Tried again on
 /// 2026-12-08 with 32 chunks and the loads summed per thread in whole units of `2⁻³²` (integer
-/// sums, so that no cut changes the forces; a test checked it with 1 to 31 chunks on one and
-/// two threads): the stage alone on two threads 1.08–1.15× faster at the styles' defaults
-/// under `shake` (`examples/interactions.rs long long_curly short --motion shake --threads
-/// 2`, three alternations), but not in the live pipeline, where each step's own timer gave
+/// sums, so that no cut changes the forces; a test checked it with 1, 2, 5, 13 and 31 chunks
+/// on one and two threads): the stage alone on two threads 1.09–1.15× faster at the styles'
+/// defaults under `shake` (medians by style; single alternations 0.92–1.20;
+/// `examples/interactions.rs long long_curly short --motion shake --threads 2`, three
+/// alternations), but not in the live pipeline, where each step's own timer gave
 /// 1.03× MORE time per contact in the interactions (median of 18 rows of `bench --live --rows
 /// "awt long shake,awt short shake,awt short_curly shake"`, five alternations; the real-time
 /// factors 0.98×). Not landed.
